@@ -1,0 +1,173 @@
+"""Every tunable of the controller: frozen dataclasses with units, defaults and ranges.
+
+This module is the single source of truth for parameters. The CLI's argument checks, the
+HTTP API's Pydantic models and the GUI sliders all read the ``min``/``max``/``step``/``unit``
+metadata attached to each field with :func:`spec`, so a new gain added here appears everywhere.
+
+Paper symbols -> names (Park & Park 2022):
+    l_step -> WalkParams.step_length, w_step -> WalkParams.step_width,
+    T_p (MPC sample) -> ComMpcParams.sample_time, H -> ComMpcParams.horizon,
+    alpha/beta/gamma (eq. 18) -> ComMpcParams.alpha/beta/gamma,
+    K_p (eq. 19) -> ComMpcParams.pelvis_gain,
+    k_pel (eq. 31-32) -> PelvisMpcParams.k_pel,
+    alpha_pel/beta_pel (eq. 37) -> PelvisMpcParams.alpha/beta,
+    omega_1..3 (eq. 43) -> ArmParams.omega1..omega3.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+Method = Literal["fixed", "redundancy", "mpc"]
+METHODS: tuple[str, ...] = ("fixed", "redundancy", "mpc")
+
+
+def _f(default: float, lo: float, hi: float, step: float, unit: str, label: str, **kw: Any) -> Any:
+    """A float field with its range, slider step, unit and label as metadata."""
+    meta = {"min": lo, "max": hi, "step": step, "unit": unit, "label": label, **kw}
+    return field(default=default, metadata=meta)
+
+
+@dataclass(frozen=True)
+class WalkParams:
+    """Footstep plan and swing-foot shape (layer 1, eq. 20-21)."""
+
+    step_length: float = _f(0.2, 0.01, 0.6, 0.01, "m", "Step length", lo_open=True)
+    step_time: float = _f(1.2, 0.6, 2.0, 0.05, "s", "Step time")
+    dsp_ratio: float = _f(0.2, 0.05, 0.5, 0.01, "", "Double-support share")
+    foot_height: float = _f(0.06, 0.0, 0.15, 0.005, "m", "Foot lift height")
+    step_width: float = _f(0.243, 0.18, 0.35, 0.001, "m", "Step width (feet lateral distance)")
+    n_steps: int = field(
+        default=10, metadata={"min": 1, "max": 200, "step": 1, "unit": "", "label": "Steps"}
+    )
+
+
+@dataclass(frozen=True)
+class ComMpcParams:
+    """CoM MPC of eq. (10)-(18) and the pelvis tracking of eq. (19)."""
+
+    horizon: float = _f(1.6, 0.2, 3.0, 0.1, "s", "Horizon H")
+    sample_time: float = _f(0.1, 0.02, 0.2, 0.01, "s", "MPC sample T_p")
+    alpha: float = _f(1.0, 0.0, 100.0, 0.1, "", "alpha (ZMP tracking)")
+    beta: float = _f(1e-3, 0.0, 10.0, 1e-4, "", "beta (CoM velocity fluctuation)")
+    gamma: float = _f(1e-6, 1e-9, 1.0, 1e-6, "", "gamma (jerk)")
+    zmp_margin: float = _f(0.02, 0.0, 0.06, 0.005, "m", "ZMP margin inside the foot")
+    pelvis_gain: float = _f(0.3, 0.0, 1.0, 0.01, "", "K_p (eq. 19)")
+
+
+@dataclass(frozen=True)
+class PelvisMpcParams:
+    """Reference pelvic angle (eq. 27-33) and pelvic-rotation MPC (eq. 34-38)."""
+
+    k_pel: float = _f(0.25, 0.0, 1.0, 0.01, "", "k_pel (eq. 31-32)")
+    alpha: float = _f(1.0, 0.0, 100.0, 0.1, "", "alpha_pel (tracking)")
+    beta: float = _f(1e-6, 1e-10, 1.0, 1e-6, "", "beta_pel (yaw acceleration)")
+    angle_limit_deg: float = _f(45.0, 0.0, 50.0, 1.0, "deg", "Pelvic angle limit")
+    acc_limit: float = _f(30.0, 1.0, 100.0, 1.0, "rad/s^2", "Yaw acceleration limit")
+
+
+@dataclass(frozen=True)
+class IkParams:
+    """QP inverse kinematics, eq. (39)-(40)."""
+
+    foot_gain: float = _f(20.0, 0.0, 200.0, 1.0, "1/s", "Foot pose error gain")
+    damping: float = _f(1e-4, 0.0, 1.0, 1e-4, "", "Joint-velocity damping")
+    joint_speed_limit: float = _f(10.0, 1.0, 30.0, 0.5, "rad/s", "Joint speed limit")
+    redundancy_weight: float = _f(0.05, 0.0, 10.0, 0.01, "", "Redundancy: waist-yaw pull to 0")
+
+
+@dataclass(frozen=True)
+class ArmParams:
+    """Arm swing QP on the centroidal momentum matrix, eq. (41)-(43)."""
+
+    enabled: bool = field(default=True, metadata={"label": "Arm swing"})
+    omega1: float = _f(1.0, 0.0, 100.0, 0.1, "", "omega1 (yaw momentum)")
+    omega2: float = _f(1e-2, 0.0, 10.0, 1e-3, "", "omega2 (initial pose)")
+    omega3: float = _f(1e-4, 0.0, 1.0, 1e-4, "", "omega3 (joint rate)")
+
+
+@dataclass(frozen=True)
+class ControllerParams:
+    """All the controller's parameters for one robot."""
+
+    method: str = "mpc"
+    walk: WalkParams = field(default_factory=WalkParams)
+    com: ComMpcParams = field(default_factory=ComMpcParams)
+    pelvis: PelvisMpcParams = field(default_factory=PelvisMpcParams)
+    ik: IkParams = field(default_factory=IkParams)
+    arms: ArmParams = field(default_factory=ArmParams)
+    control_dt: float = 0.005  # [s] 200 Hz, fixed by the paper
+
+    def validated(self) -> ControllerParams:
+        """Return self after checking every field against its range; raise ValueError."""
+        validate(self)
+        return self
+
+    def replace(self, **groups: Any) -> ControllerParams:
+        """Copy with some groups replaced, e.g. ``p.replace(walk=dict(step_length=0.3))``."""
+        changes: dict[str, Any] = {}
+        for name, value in groups.items():
+            if isinstance(value, dict):
+                changes[name] = dataclasses.replace(getattr(self, name), **value)
+            else:
+                changes[name] = value
+        return dataclasses.replace(self, **changes).validated()
+
+
+GROUPS: tuple[str, ...] = ("walk", "com", "pelvis", "ik", "arms")
+
+
+def spec(cls_or_obj: Any) -> dict[str, dict[str, Any]]:
+    """Field name -> metadata (min, max, step, unit, label, default) of a params dataclass."""
+    out = {}
+    for f in dataclasses.fields(cls_or_obj):
+        meta = dict(f.metadata)
+        default = f.default if f.default is not dataclasses.MISSING else None
+        meta["default"] = default
+        meta["type"] = type(default).__name__
+        out[f.name] = meta
+    return out
+
+
+def check_value(group: str, name: str, value: Any, meta: dict[str, Any]) -> None:
+    """Raise ValueError with a one-line message if ``value`` is outside its range."""
+    where = f"{group}.{name}" if group else name
+    if meta.get("type") == "bool":
+        if not isinstance(value, bool):
+            raise ValueError(f"{where} must be true or false, got {value!r}")
+        return
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{where} must be a number, got {value!r}")
+    if not math.isfinite(value):
+        raise ValueError(f"{where} must be finite, got {value!r}")
+    lo, hi = meta.get("min"), meta.get("max")
+    unit = f" {meta['unit']}" if meta.get("unit") else ""
+    if lo is not None and (value < lo or (meta.get("lo_open") and value <= 0)):
+        raise ValueError(f"{where} = {value} is below the minimum {lo}{unit}")
+    if hi is not None and value > hi:
+        raise ValueError(f"{where} = {value} is above the maximum {hi}{unit}")
+    if meta.get("type") == "int" and int(value) != value:
+        raise ValueError(f"{where} must be an integer, got {value!r}")
+
+
+def validate(p: ControllerParams) -> None:
+    """Check every field of every group against its range; raise ValueError on the first bad."""
+    if p.method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {p.method!r}")
+    for group in GROUPS:
+        obj = getattr(p, group)
+        for name, meta in spec(obj).items():
+            check_value(group, name, getattr(obj, name), meta)
+    if p.com.horizon < p.com.sample_time:
+        raise ValueError(
+            f"com.horizon = {p.com.horizon} s is shorter than one MPC sample "
+            f"({p.com.sample_time} s)"
+        )
+
+
+def horizon_samples(com: ComMpcParams) -> int:
+    """N = H / T_p, the number of MPC samples (at least 1)."""
+    return max(1, int(round(com.horizon / com.sample_time)))
