@@ -1,0 +1,174 @@
+"""The ``pelvic-walk`` command line (INTERFACES.md).
+
+Bad arguments exit with status 2 and one clear line on stderr, never a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from pathlib import Path
+from typing import Any, NoReturn
+
+from controller.params import METHODS, ControllerParams
+
+
+class _Parser(argparse.ArgumentParser):
+    """argparse that reports errors on one line (no usage dump) and exits 2."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f"{self.prog}: error: {message}\n")
+
+
+def _finite(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
+    if not math.isfinite(value):
+        raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return value
+
+
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
+def _port(text: str) -> int:
+    value = _positive_int(text)
+    if value > 65535:
+        raise argparse.ArgumentTypeError(f"not a port number: {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = _Parser(prog="pelvic-walk", description=__doc__)
+    sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+
+    p = sub.add_parser("serve", help="the web teaching tool (FastAPI + viser)")
+    p.add_argument("--host", default=None)
+    p.add_argument("--port", type=_port, default=None)
+    p.add_argument("--viser-port", type=_port, default=None)
+
+    p = sub.add_parser("simulate", help="one headless closed-loop MuJoCo run")
+    p.add_argument("--method", choices=METHODS, required=True)
+    p.add_argument("--step-length", type=_finite, required=True, help="[m]")
+    p.add_argument("--step-time", type=_finite, default=None, help="[s]")
+    p.add_argument("--dsp-ratio", type=_finite, default=None, help="double-support share")
+    p.add_argument("--steps", type=_positive_int, default=10)
+    p.add_argument("--horizon", type=_finite, default=None, help="MPC horizon [s]")
+    p.add_argument("--no-arms", action="store_true", help="switch the arm swing off")
+    p.add_argument("--seed", type=int, default=None)
+    p.add_argument("--backend", choices=("osqp", "daqp"), default="osqp")
+    p.add_argument("--json", type=Path, default=None, help="write the summary here")
+    p.add_argument("--csv", type=Path, default=None, help="write the time series here")
+
+    p = sub.add_parser("analyze", help="the kinematic analysis of eq. (1)-(5)")
+    p.add_argument("--json", type=Path, default=None)
+
+    p = sub.add_parser("experiments", help="reproduce the paper's simulation results")
+    p.add_argument("--out", type=Path, required=True)
+    p.add_argument("--quick", action="store_true")
+    p.add_argument("--jobs", type=_positive_int, default=None)
+
+    p = sub.add_parser("bench", help="performance figures")
+    p.add_argument("--json", type=Path, default=None)
+    p.add_argument("--ticks", type=_positive_int, default=600)
+    return parser
+
+
+def params_from_args(args: argparse.Namespace) -> ControllerParams:
+    """Controller parameters from ``simulate``'s options; ValueError on a bad value."""
+    base = ControllerParams()
+    walk: dict[str, Any] = {"step_length": args.step_length, "n_steps": args.steps}
+    if args.step_time is not None:
+        walk["step_time"] = args.step_time
+    if args.dsp_ratio is not None:
+        walk["dsp_ratio"] = args.dsp_ratio
+    com: dict[str, Any] = {}
+    if args.horizon is not None:
+        com["horizon"] = args.horizon
+    return base.replace(
+        method=args.method, walk=walk, com=com, arms={"enabled": not args.no_arms}
+    )
+
+
+def _simulate(args: argparse.Namespace) -> int:
+    from app.runs import RunConfig, run
+
+    try:
+        params = params_from_args(args)
+    except ValueError as exc:  # bad parameter values: one line, exit 2, nothing started
+        print(f"pelvic-walk simulate: error: {exc}", file=sys.stderr)
+        return 2
+    cfg = RunConfig(params=params, seed=args.seed,
+                    perturbation=0.01 if args.seed is not None else 0.0, backend=args.backend)
+    session = run(cfg)
+    summary = session.summary()
+    ok = "success" if summary["success"] else ("FELL" if summary["fell"] else "incomplete")
+    le = summary["landing_error_max"]
+    print(
+        f"{summary['method']} step {summary['step_length']:.3f} m x {summary['steps_planned']}: "
+        f"{ok}, {summary['steps_completed']}/{summary['steps_planned']} steps, "
+        f"landing error max {le * 100 if le is not None else float('nan'):.1f} cm, "
+        f"ZMP in support {summary['zmp_in_support_ratio'] * 100:.1f} %, "
+        f"waist max {summary['waist_yaw_max_deg']:.1f} deg, "
+        f"kappa max {summary['condition_number_max']:.1f}, "
+        f"solver failures {summary['solver_failures']}, "
+        f"RTF {summary['realtime_factor'] or 0:.1f}"
+    )
+    if summary["fell"]:
+        print(f"fell at {summary['fall_time']:.2f} s: {summary['fall_reason']}")
+    if args.json:
+        args.json.write_text(json.dumps(summary, indent=2))
+    if args.csv:
+        session.series.to_csv(str(args.csv))
+    return 0
+
+
+def _analyze(args: argparse.Namespace) -> int:
+    from controller.analysis import kinematic_analysis
+
+    paper = kinematic_analysis()
+    for k, v in paper.items():
+        print(f"{k:32s} {v:.4f}" if isinstance(v, float) else f"{k:32s} {v}")
+    if args.json:
+        args.json.write_text(json.dumps(paper, indent=2))
+    return 0
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        if args.command == "simulate":
+            return _simulate(args)
+        if args.command == "analyze":
+            return _analyze(args)
+        if args.command == "serve":
+            from app.web.server import serve
+
+            return serve(args.host, args.port, args.viser_port)
+        if args.command == "experiments":
+            from app.experiments.runner import main as experiments_main
+
+            return experiments_main(args.out, quick=args.quick, jobs=args.jobs)
+        if args.command == "bench":
+            from app.bench import main as bench_main
+
+            return bench_main(args.json, ticks=args.ticks)
+    except KeyboardInterrupt:
+        return 130
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

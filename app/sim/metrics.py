@@ -1,0 +1,76 @@
+"""Time series kept in memory-bounded arrays, and the run summary of SPEC.md section 5.
+
+``Series`` is a fixed-capacity ring buffer of named float columns: a headless run sizes it to
+the whole plan, a live session to a rolling window, so memory never grows with run time.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+COLUMNS = (
+    "t",                  # [s]
+    "waist_angle",        # [rad] measured waist yaw
+    "waist_angle_cmd",    # [rad] commanded waist yaw
+    "waist_rate",         # [rad/s] commanded waist yaw rate
+    "theta_ref",          # [rad] first sample of the reference pelvic angle
+    "yaw_momentum",       # [kg m^2/s] whole body about the CoM, measured (MuJoCo)
+    "h_low",              # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
+    "h_up",               # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
+    "kappa",              # condition number of the moving joints' Jacobian (eq. 45)
+    "cop_x", "cop_y",     # [m] centre of pressure of the foot contact forces (nan if none)
+    "zmp_in_support",     # 1 if the CoP is inside the support polygon
+    "zmp_ref_x", "zmp_ref_y",
+    "lipm_zmp_x", "lipm_zmp_y",  # [m] ZMP of the LIPM from the measured CoM (paper Fig. 15)
+    "com_x", "com_y", "com_z",   # [m] measured CoM (MuJoCo)
+    "com_des_x", "com_des_y",    # [m] desired CoM (CoM MPC)
+    "reach_left", "reach_right", # hip-to-ankle distance / leg length (commanded)
+    "energy",             # [J] cumulative positive joint work (eq. 44)
+    "tick_ms",            # [ms] controller tick time
+    "step_index",
+    "in_ssp",
+)
+
+
+class Series:
+    """Ring buffer of named float columns with a fixed capacity (rows)."""
+
+    def __init__(self, capacity: int, columns: tuple[str, ...] = COLUMNS):
+        self.columns = columns
+        self.index = {c: i for i, c in enumerate(columns)}
+        self.capacity = int(capacity)
+        self.data = np.full((self.capacity, len(columns)), np.nan)
+        self.count = 0  # rows ever appended
+
+    def append(self, row: np.ndarray) -> None:
+        self.data[self.count % self.capacity] = row
+        self.count += 1
+
+    def new_row(self) -> np.ndarray:
+        return np.full(len(self.columns), np.nan)
+
+    def __len__(self) -> int:
+        return min(self.count, self.capacity)
+
+    def column(self, name: str, last: int | None = None) -> np.ndarray:
+        """The column in time order (oldest first), optionally only the last rows."""
+        n = len(self)
+        k = n if last is None else min(last, n)
+        start = self.count - k
+        idx = np.arange(start, self.count) % self.capacity
+        return self.data[idx, self.index[name]].copy()
+
+    def as_dict(self, last: int | None = None) -> dict[str, np.ndarray]:
+        return {c: self.column(c, last) for c in self.columns}
+
+    def to_csv(self, path: str) -> None:
+        arr = np.column_stack([self.column(c) for c in self.columns])
+        np.savetxt(path, arr, delimiter=",", header=",".join(self.columns), comments="")
+
+
+def two_step_windows(cum_energy_at_step_starts: np.ndarray) -> np.ndarray:
+    """Energy per two-step window (eq. 44) from the cumulative energy at each step start."""
+    e = np.asarray(cum_energy_at_step_starts, dtype=float)
+    if len(e) < 3:
+        return np.zeros(0)
+    return e[2::2] - e[:-2:2][: len(e[2::2])]

@@ -1,0 +1,83 @@
+"""Arm swing that cancels the lower body's yaw angular momentum, eq. (41)-(43) of Park & Park.
+
+    h_low = A_low,yaw . q_dot_low                                                   (41)
+    h_up  = A_up,yaw  . q_dot_up                                                    (42)
+    min_{q_dot_up}  omega1/2 (h_low + h_up)^2
+                  + omega2/2 ||q_up_init - (q_up + dt q_dot_up)||^2
+                  + omega3/2 ||q_dot_up||^2                                          (43)
+    s.t. max((q_min - q_up)/dt, -qd_max) <= q_dot_up <= min((q_max - q_up)/dt, qd_max)
+
+Paper symbols -> code names:
+    A^CMM_low,yaw (13,) -> ``a_low_yaw``; A^CMM_up,yaw (4,) -> ``a_up_yaw`` (the yaw row of
+    Pinocchio's centroidal momentum matrix, columns of the 4 arm joints of
+    ``ARM_QP_JOINTS`` = [L shoulder pitch, L elbow, R shoulder pitch, R elbow]);
+    q_dot_low -> ``q_dot_low`` (the IK's solution of this tick, eq. 40); q_up,cur -> ``q_up``;
+    q_up^init -> ``q_up_init``; omega1..3 -> ``params.omega1..omega3``; Delta t -> ``dt``.
+
+Choices where the paper is vague:
+- The pose term of eq. (43) is read as the pose *after* this tick, q_up + dt q_dot_up (a
+  velocity-level QP); its effective pull is a first-order return toward q_up^init with time
+  constant about ``(omega3 + omega2 dt^2) / (omega2 dt)`` (2 s with the paper's weights).
+- With omega2 = omega3 = 0 the Hessian is rank one (singular); OSQP copes, DAQP may not.
+
+QP: P = omega1 a a' + (omega2 dt^2 + omega3) I, q = omega1 h_low a - omega2 dt (q_init - q_up).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controller.ik import velocity_bounds
+from controller.params import ArmParams
+from controller.qp import QP, QpSolver
+
+
+def yaw_momentum(a_yaw: np.ndarray, q_dot: np.ndarray) -> float:
+    """Yaw angular momentum a_yaw . q_dot [kg m^2/s] (eq. 41 or 42)."""
+    return float(np.dot(np.asarray(a_yaw, dtype=float), np.asarray(q_dot, dtype=float)))
+
+
+def build_arm_qp(
+    a_low_yaw: np.ndarray,
+    q_dot_low: np.ndarray,
+    a_up_yaw: np.ndarray,
+    q_up: np.ndarray,
+    q_up_init: np.ndarray,
+    q_min: np.ndarray,
+    q_max: np.ndarray,
+    qd_max: float,
+    params: ArmParams,
+    dt: float,
+) -> QP:
+    """The QP of eq. (43).
+
+    Args:
+        a_low_yaw: (13,) yaw row of the centroidal momentum matrix, lower-body columns.
+        q_dot_low: (13,) lower-body joint velocities of this tick [rad/s].
+        a_up_yaw: (4,) yaw row, columns of the 4 arm joints.
+        q_up: (4,) current arm joint angles [rad].
+        q_up_init: (4,) initial (walk-ready) arm joint angles [rad].
+        q_min, q_max: (4,) arm joint limits [rad].
+        qd_max: arm joint speed bound [rad/s] (10 in the authors' code).
+        params: weights omega1..omega3.
+        dt: control period [s].
+
+    Returns:
+        QP with variable q_dot_up (4,), A = identity (4 bound rows).
+    """
+    a = np.asarray(a_up_yaw, dtype=float)
+    q = np.asarray(q_up, dtype=float)
+    n = a.shape[0]
+    h_low = yaw_momentum(a_low_yaw, q_dot_low)
+    r = np.asarray(q_up_init, dtype=float) - q  # (4,) pose error [rad]
+    w1, w2, w3 = params.omega1, params.omega2, params.omega3
+    P = w1 * np.outer(a, a) + (w2 * dt * dt + w3) * np.eye(n)
+    c = w1 * h_low * a - w2 * dt * r
+    lo, hi = velocity_bounds(q, q_min, q_max, dt, qd_max)
+    return QP(P, c, np.eye(n), lo, hi)
+
+
+def solve_arm(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:
+    """Solve eq. (43); returns (q_dot_up (4,), ok). On failure: the solver's fallback."""
+    res = solver.solve(qp)
+    return res.x, res.ok

@@ -1,0 +1,231 @@
+"""CoM MPC with minimal velocity fluctuation, eq. (10)-(18), and the CoM prediction (25)-(26).
+
+Model: linear inverted pendulum with constant CoM height z_c, decoupled in x and y. Per axis
+the state is x_i = [p, v, a] (eq. 10-11: position [m], velocity [m/s], acceleration [m/s^2])
+and the input is the jerk [m/s^3], held constant over one MPC sample T_p (eq. 12-13):
+
+    x_{i+1} = A x_i + B u_i,  A = [[1, T, T^2/2], [0, 1, T], [0, 0, 1]],  B = [T^3/6, T^2/2, T].
+
+The ZMP is z = p - (z_c / g) a = C x (eq. 14-15; the paper's ``C A x_i`` is C applied to the
+next state, i.e. the ZMP of the predicted samples).
+
+Paper symbols -> code names:
+    P_A, P_B (eq. 25-26) -> ``state_from_state`` (3N, 3), ``state_from_jerk`` (3N, N), rows
+        ordered [p_1..p_N, v_1..v_N, a_1..a_N] (sample k = 1..N after the current state);
+    Z (eq. 16-17) = ``zmp_from_state`` x_0 + ``zmp_from_jerk`` U;
+    Delta V (eq. 18) = ``dvel_from_state`` x_0 + ``dvel_from_jerk`` U = [v_1 - v_0, v_2 - v_1,
+        ..., v_N - v_{N-1}] (the first difference uses the current velocity v_0);
+    alpha, beta, gamma (eq. 18) -> ``ComMpcParams.alpha``, ``beta``, ``gamma`` (same for x, y);
+    Z^min, Z^max (eq. 18) -> :meth:`controller.footsteps.FootstepPlan.zmp_bounds` with
+        ``ComMpcParams.zmp_margin``; Z^ref -> ``FootstepPlan.zmp_reference``.
+
+The QP (one for both axes, 2N variables U = [U_x; U_y], block diagonal):
+    min 1/2 U' P U + q' U  s.t.  Z^min - Pzs x_0 <= Pzu U <= Z^max - Pzs x_0, with
+    P = alpha Pzu'Pzu + beta Pdu'Pdu + gamma I, q = alpha Pzu'(Pzs x_0 - Z^ref)
+    + beta Pdu'(Pds x_0) per axis. P and the constraint matrix depend on the parameters only
+    and are built once (closed-form index arithmetic, no loop over the horizon); a tick
+    changes q, l, u only, and :class:`controller.qp.QpSolver` warm-starts OSQP.
+
+Choices where the paper is vague:
+- The samples are at t + k T_p, k = 1..N, with N = ``horizon_samples(params)``; the ZMP is
+  constrained and tracked at those N samples (the current ZMP is already fixed by the state).
+- The first jerk is applied for one control period ``control_dt`` (5 ms), not T_p: the MPC is
+  re-solved every tick (``ComPlan.next_state``).
+- On a failed QP the previous optimal jerk sequence, shifted by the time elapsed since it was
+  computed (the last value repeated), is used with ``ok=False``; zeros if there is none.
+- g = 9.81 m/s^2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from controller.footsteps import FootstepPlan
+from controller.params import ComMpcParams, horizon_samples
+from controller.qp import QP, QpSolver
+
+GRAVITY = 9.81  # [m/s^2]
+
+
+@dataclass(frozen=True)
+class ComPlan:
+    """One CoM MPC solution: the predicted horizon (eq. 25-26) and the state after one tick."""
+
+    times: np.ndarray  # (N,) [s] absolute times of the predicted samples t + k T_p, k = 1..N
+    com: np.ndarray  # (N, 2) [m] predicted CoM x, y (eq. 25-26)
+    com_vel: np.ndarray  # (N, 2) [m/s]
+    zmp: np.ndarray  # (N, 2) [m] predicted ZMP
+    zmp_ref: np.ndarray  # (N, 2) [m]
+    jerk: np.ndarray  # (N, 2) [m/s^3] optimal inputs
+    next_state: np.ndarray  # (3, 2) [pos, vel, acc] x (x, y) after one control period
+    ok: bool  # False when the QP failed (the previous jerk sequence, shifted, was used)
+    com_acc: np.ndarray | None = None  # (N, 2) [m/s^2] predicted CoM acceleration
+    zmp_lo: np.ndarray | None = None  # (N, 2) [m] ZMP lower bound at the samples
+    zmp_hi: np.ndarray | None = None  # (N, 2) [m] ZMP upper bound at the samples
+    status: str = ""  # solver status text
+
+
+def lipm_discrete(T: float) -> tuple[np.ndarray, np.ndarray]:
+    """A (3, 3), B (3,) of eq. (12) for a jerk held over T [s]."""
+    A = np.array([[1.0, T, T * T / 2.0], [0.0, 1.0, T], [0.0, 0.0, 1.0]])
+    B = np.array([T**3 / 6.0, T * T / 2.0, T])
+    return A, B
+
+
+def prediction_matrices(T: float, N: int) -> tuple[np.ndarray, np.ndarray]:
+    """P_A (3N, 3) and P_B (3N, N) of eq. (25), rows [p_1..p_N, v_1..v_N, a_1..a_N].
+
+    Closed form of x_k = A^k x_0 + sum_{j<k} A^(k-1-j) B u_j: with i = k - 1 - j >= 0,
+    p gets (1 + 3i + 3i^2) T^3/6 u_j, v gets (1 + 2i) T^2/2 u_j, a gets T u_j.
+    """
+    k = np.arange(1, N + 1, dtype=float)[:, None]  # (N, 1) sample index
+    kT = k * T
+    one, zero = np.ones_like(kT), np.zeros_like(kT)
+    PA = np.vstack([
+        np.hstack([one, kT, kT**2 / 2.0]),
+        np.hstack([zero, one, kT]),
+        np.hstack([zero, zero, one]),
+    ])
+    i = np.arange(N)[:, None] - np.arange(N)[None, :]  # k-1-j for rows k-1, columns j
+    lower = i >= 0
+    i = np.maximum(i, 0).astype(float)
+    PB = np.vstack([
+        np.where(lower, (1.0 + 3.0 * i + 3.0 * i**2) * T**3 / 6.0, 0.0),
+        np.where(lower, (1.0 + 2.0 * i) * T**2 / 2.0, 0.0),
+        np.where(lower, T, 0.0),
+    ])
+    return PA, PB
+
+
+class ComMpc:
+    """Builds and solves the CoM MPC QP of eq. (18) every control tick.
+
+    Args:
+        params: horizon, sample time, weights and ZMP margin.
+        com_height: z_c [m], the constant CoM height of the LIPM.
+        control_dt: [s] control period over which the first jerk is applied.
+        backend: ``"osqp"`` (warm-started) or ``"daqp"`` (exact active set).
+    """
+
+    def __init__(
+        self,
+        params: ComMpcParams,
+        com_height: float,
+        control_dt: float = 0.005,
+        backend: str = "osqp",
+    ):
+        self.com_height = float(com_height)  # z_c [m]
+        self.control_dt = float(control_dt)  # [s]
+        self.solver = QpSolver(backend)
+        self.params: ComMpcParams | None = None
+        self.last_qp: QP | None = None
+        self._prev_jerk: np.ndarray | None = None  # (N, 2) last optimal jerks
+        self._prev_t: float = 0.0
+        self.set_params(params)
+
+    # -- matrices -------------------------------------------------------------------------
+    def set_params(self, params: ComMpcParams) -> None:
+        """Rebuild the matrices if ``params`` changed; reset the solver if N changed."""
+        if params == self.params:
+            return
+        old_n = getattr(self, "N", None)
+        self.params = params
+        self.T = float(params.sample_time)  # T_p [s]
+        self.N = horizon_samples(params)
+        N, T, c = self.N, self.T, self.com_height / GRAVITY
+        self.state_from_state, self.state_from_jerk = prediction_matrices(T, N)  # P_A, P_B
+        PA, PB = self.state_from_state, self.state_from_jerk
+        self.zmp_from_state = PA[:N] - c * PA[2 * N :]  # (N, 3)
+        self.zmp_from_jerk = PB[:N] - c * PB[2 * N :]  # (N, N)
+        D = np.eye(N) - np.eye(N, k=-1)  # consecutive differences of [v_1..v_N]
+        e1v = np.zeros((N, 3))
+        e1v[0, 1] = 1.0  # the first difference subtracts v_0
+        self.dvel_from_state = D @ PA[N : 2 * N] - e1v  # (N, 3)
+        self.dvel_from_jerk = D @ PB[N : 2 * N]  # (N, N)
+        Pzu, Pdu = self.zmp_from_jerk, self.dvel_from_jerk
+        H = params.alpha * Pzu.T @ Pzu + params.beta * Pdu.T @ Pdu + params.gamma * np.eye(N)
+        H = (H + H.T) / 2.0
+        Z = np.zeros((N, N))
+        self.hessian = np.block([[H, Z], [Z, H]])  # (2N, 2N)
+        self.constraint = np.block([[Pzu, Z], [Z, Pzu]])  # (2N, 2N)
+        # q = G_ref (Pzs x0 - Zref) + G_dv x0, per axis
+        self._q_zmp = params.alpha * Pzu.T  # (N, N)
+        self._q_dv = params.beta * Pdu.T @ self.dvel_from_state  # (N, 3)
+        self.A_ctrl, self.B_ctrl = lipm_discrete(self.control_dt)
+        if old_n is not None and old_n != N:
+            self.solver.reset()
+            self._prev_jerk = None
+
+    def reset(self) -> None:
+        """Forget the warm start and the fallback jerk sequence (e.g. on a simulation reset)."""
+        self.solver.reset()
+        self._prev_jerk = None
+
+    # -- QP -------------------------------------------------------------------------------
+    def build(
+        self,
+        state: np.ndarray,
+        zmp_ref: np.ndarray,
+        zmp_lo: np.ndarray,
+        zmp_hi: np.ndarray,
+    ) -> QP:
+        """The QP of eq. (18) for the current state.
+
+        Args:
+            state: (3, 2) [pos, vel, acc] x (x, y) of the CoM now.
+            zmp_ref: (N, 2) [m] ZMP reference at the N samples.
+            zmp_lo, zmp_hi: (N, 2) [m] ZMP bounds at the N samples.
+
+        Returns:
+            The QP over U = [U_x; U_y] (2N jerks [m/s^3]).
+        """
+        x0 = np.asarray(state, dtype=float)
+        z_free = self.zmp_from_state @ x0  # (N, 2) ZMP with zero jerk
+        q = self._q_zmp @ (z_free - zmp_ref) + self._q_dv @ x0  # (N, 2)
+        l = np.asarray(zmp_lo, dtype=float) - z_free
+        u = np.asarray(zmp_hi, dtype=float) - z_free
+        return QP(self.hessian, q.T.ravel(), self.constraint, l.T.ravel(), u.T.ravel())
+
+    def sample_times(self, t: float) -> np.ndarray:
+        """(N,) [s] the predicted samples' absolute times t + k T_p, k = 1..N."""
+        return t + self.T * np.arange(1, self.N + 1)
+
+    def solve(self, state: np.ndarray, t: float, plan: FootstepPlan) -> ComPlan:
+        """Solve eq. (18) at time ``t`` [s] from ``state`` (3, 2) along ``plan``.
+
+        Returns:
+            The predicted horizon (eq. 25-26) and the state after one control period.
+        """
+        assert self.params is not None
+        x0 = np.asarray(state, dtype=float)
+        times = self.sample_times(t)
+        ref = plan.zmp_reference(times)
+        lo, hi = plan.zmp_bounds(times, self.params.zmp_margin)
+        qp = self.build(x0, ref, lo, hi)
+        self.last_qp = qp
+        res = self.solver.solve(qp)
+        N = self.N
+        if res.ok:
+            jerk = res.x.reshape(2, N).T
+            self._prev_jerk, self._prev_t = jerk, float(t)
+        elif self._prev_jerk is not None:
+            shift = int(np.floor((t - self._prev_t) / self.T + 1e-9))
+            jerk = self._prev_jerk[np.minimum(np.arange(N) + max(shift, 0), N - 1)]
+        else:
+            jerk = np.zeros((N, 2))
+        traj = self.state_from_state @ x0 + self.state_from_jerk @ jerk  # (3N, 2)
+        com, vel, acc = traj[:N], traj[N : 2 * N], traj[2 * N :]
+        zmp = self.zmp_from_state @ x0 + self.zmp_from_jerk @ jerk
+        next_state = self.A_ctrl @ x0 + np.outer(self.B_ctrl, jerk[0])
+        return ComPlan(
+            times=times, com=com, com_vel=vel, zmp=zmp, zmp_ref=ref, jerk=jerk,
+            next_state=next_state, ok=bool(res.ok), com_acc=acc, zmp_lo=lo, zmp_hi=hi,
+            status=res.status,
+        )
+
+    def zmp_of(self, state: np.ndarray) -> np.ndarray:
+        """LIPM ZMP p - (z_c / g) a [m] of a (3, ...) state."""
+        s = np.asarray(state, dtype=float)
+        return s[0] - self.com_height / GRAVITY * s[2]

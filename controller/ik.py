@@ -1,0 +1,172 @@
+"""QP inverse kinematics of the lower body, eq. (39)-(40) of Park & Park (2022).
+
+Decision variable: the 13 lower-body joint velocities q_dot = [waist yaw, left leg (6),
+right leg (6)] (eq. 6), the order of ``LOWER_JOINTS``. The QP is
+
+    min  1/2 ||J_low q_dot - v_des||^2 + damping/2 ||q_dot||^2 (+ redundancy term)     (39)
+    s.t. max((q_min - q)/dt, -v_max) <= q_dot <= min((q_max - q)/dt, v_max)
+         waist row: per method (SPEC section 3)
+
+and the caller sets q_des = q + dt q_dot (eq. 40).
+
+Paper symbols -> code names:
+    J_low (eq. 9, 12 x 13, pelvis frame) -> ``J_low``; X_dot_f,d -> ``v_des`` (12,) =
+    [left foot twist (6); right foot twist (6)], each [linear (3); angular (3)] in the pelvis
+    frame (Pinocchio's LOCAL_WORLD_ALIGNED ordering, expressed in the pelvis frame);
+    q_low,cur -> ``q_low``; q_low,min/max -> ``q_min``/``q_max``; Delta t -> ``dt``;
+    q_dot_low,min/max -> +-``params.joint_speed_limit``; theta_dot_{i+1} -> ``waist_rate``.
+
+The three methods (SPEC section 3):
+- ``fixed``: waist row l = u = 0 (no pelvic rotation).
+- ``mpc``: waist row l = u = ``waist_rate`` (the pelvic MPC's theta_dot_{i+1}), **clipped into
+  the waist's joint-limit / speed bounds** so the QP always stays feasible (the MPC already
+  keeps the angle within +-45 deg, inside the joint range; the clip only matters if the two
+  limits disagree).
+- ``redundancy`` (ref. [21]): the waist is free; the motion comes from the redundancy (the
+  damping term spreads joint motion onto the waist when that reduces the legs' velocities,
+  i.e. during the swing) and a regularisation pulls the waist toward 0 using the current state
+  only (no prediction):
+
+      redundancy_weight/2 * (q_waist + dt q_dot_waist)^2        [rad^2]
+
+  i.e. the squared waist angle one control period ahead. Equivalently
+  ``(w dt^2)/2 (q_dot_waist + q_waist/dt)^2``: a rate task toward the one-tick dead-beat rate,
+  weighted w dt^2. Against the damping it produces, in double support (feet still, so only
+  the 1-D null space of J_low moves), a first-order decay of the waist angle with time
+  constant about ``damping |n|^2 / (w dt)`` where n is the null-space vector scaled to a unit
+  waist component (|n|^2 ~ 2-4): ~1 s with the defaults (damping 1e-4, w 0.05, dt 5 ms), the
+  slow decay toward 0 of the paper's Fig. 8. Dividing by dt^2 instead (a rate residual
+  comparable to the foot task) would snap the waist back within a few ticks.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from controller.params import IkParams
+from controller.qp import QP, QpSolver
+
+WAIST = 0  # index of the waist yaw in q_low (13,)
+N_LOW = 13
+METHODS = ("fixed", "redundancy", "mpc")
+
+
+def velocity_bounds(
+    q: np.ndarray, q_min: np.ndarray, q_max: np.ndarray, dt: float, speed_limit: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Joint-angle limits as velocity bounds intersected with |q_dot| <= speed_limit.
+
+    A joint already beyond a limit gets a bound that moves it back (at most ``speed_limit``),
+    so ``lo <= hi`` always holds.
+
+    Returns:
+        (lo, hi), each shaped like ``q`` [rad/s].
+    """
+    lo = np.clip((np.asarray(q_min) - q) / dt, -speed_limit, speed_limit)
+    hi = np.clip((np.asarray(q_max) - q) / dt, -speed_limit, speed_limit)
+    return lo, np.maximum(hi, lo)
+
+
+def build_ik(
+    J_low: np.ndarray,
+    v_des: np.ndarray,
+    q_low: np.ndarray,
+    q_min: np.ndarray,
+    q_max: np.ndarray,
+    params: IkParams,
+    dt: float,
+    method: str,
+    waist_rate: float | None = None,
+) -> QP:
+    """The QP of eq. (39) for one tick.
+
+    Args:
+        J_low: (12, 13) lower-body Jacobian in the pelvis frame (eq. 9).
+        v_des: (12,) desired foot twists [left; right], each [v (3) m/s; omega (3) rad/s].
+        q_low: (13,) current (commanded) lower-body joint angles [rad].
+        q_min, q_max: (13,) joint limits [rad].
+        params: ``damping``, ``joint_speed_limit``, ``redundancy_weight``.
+        dt: control period [s].
+        method: ``"fixed"``, ``"redundancy"`` or ``"mpc"``.
+        waist_rate: theta_dot_{i+1} [rad/s] from the pelvic MPC; required for ``"mpc"``.
+
+    Returns:
+        QP with variable q_dot (13,), A = identity (13 bound rows).
+    """
+    if method not in METHODS:
+        raise ValueError(f"unknown IK method {method!r} (one of {', '.join(METHODS)})")
+    J = np.asarray(J_low, dtype=float)
+    v = np.asarray(v_des, dtype=float)
+    q = np.asarray(q_low, dtype=float)
+    P = J.T @ J + params.damping * np.eye(N_LOW)  # (13, 13)
+    c = -J.T @ v  # (13,)
+    lo, hi = velocity_bounds(q, q_min, q_max, dt, params.joint_speed_limit)
+    if method == "fixed":
+        lo[WAIST] = hi[WAIST] = 0.0
+    elif method == "mpc":
+        if waist_rate is None:
+            raise ValueError("method 'mpc' needs waist_rate (the pelvic MPC's theta_dot)")
+        w = float(np.clip(waist_rate, lo[WAIST], hi[WAIST]))
+        lo[WAIST] = hi[WAIST] = w
+    else:  # redundancy: w/2 (q_w + dt qd_w)^2 = w dt^2/2 qd_w^2 + w dt q_w qd_w + const
+        w = params.redundancy_weight
+        P[WAIST, WAIST] += w * dt * dt
+        c[WAIST] += w * dt * q[WAIST]
+    return QP(P, c, np.eye(N_LOW), lo, hi)
+
+
+def solve_ik(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:
+    """Solve the IK QP; returns (q_dot (13,), ok). On failure q_dot is the solver's fallback
+    (its previous solution, or zeros)."""
+    res = solver.solve(qp)
+    return res.x, res.ok
+
+
+def log3(R: np.ndarray) -> np.ndarray:
+    """Rotation vector (axis * angle, (3,)) of a rotation matrix R (3, 3); angle in [0, pi]."""
+    R = np.asarray(R, dtype=float)
+    cos = np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)
+    angle = float(np.arccos(cos))
+    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])  # 2 sin(a) axis
+    if angle < 1e-6:
+        return 0.5 * w  # first order: R ~ I + [phi]x
+    if np.pi - angle > 1e-4:
+        return angle / (2.0 * np.sin(angle)) * w
+    # Near pi: axis from the diagonal of R = 2 a a' - I (+ small antisymmetric part).
+    B = 0.5 * (R + np.eye(3))
+    i = int(np.argmax(np.diag(B)))
+    axis = B[:, i] / np.sqrt(max(B[i, i], 1e-12))
+    axis /= np.linalg.norm(axis)
+    if axis @ w < 0.0:
+        axis = -axis
+    return angle * axis
+
+
+def pose_error(T_cur: np.ndarray, T_des: np.ndarray) -> np.ndarray:
+    """[p_des - p_cur; log3(R_des R_cur^T)] (6,), both poses (4, 4) in the same frame."""
+    e_p = T_des[:3, 3] - T_cur[:3, 3]
+    e_r = log3(T_des[:3, :3] @ T_cur[:3, :3].T)
+    return np.concatenate([e_p, e_r])
+
+
+def foot_velocity_command(
+    T_cur_left: np.ndarray,
+    T_des_left: np.ndarray,
+    v_ff_left: np.ndarray,
+    T_cur_right: np.ndarray,
+    T_des_right: np.ndarray,
+    v_ff_right: np.ndarray,
+    gain: float,
+) -> np.ndarray:
+    """Desired foot twists for eq. (39): feed-forward + gain * pose error, per foot.
+
+    All poses (4, 4) and twists (6,) = [linear; angular] are in the pelvis frame. The rotation
+    error ``log3(R_des R_cur^T)`` is expressed in that same frame, matching the angular part of
+    the twist.
+
+    Returns:
+        (12,) [left twist (6); right twist (6)].
+    """
+    left = np.asarray(v_ff_left, dtype=float) + gain * pose_error(T_cur_left, T_des_left)
+    right = np.asarray(v_ff_right, dtype=float) + gain * pose_error(T_cur_right, T_des_right)
+    return np.concatenate([left, right])

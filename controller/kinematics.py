@@ -1,0 +1,164 @@
+"""Whole-body kinematics with Pinocchio, loaded from the same MJCF as the simulation.
+
+Paper symbols (Park & Park, IEEE Access 2022) -> names here:
+- q_low (eq. 8-9): the 13 lower-body joints `LOWER_JOINTS` = [waist yaw, left leg 6, right leg 6];
+  `lower_v_idx` are their columns in Pinocchio's velocity vector v.
+- J_low (eq. 8-9): `KinState.J_low` (12 x 13), the stacked left/right sole twists
+  [v (3), w (3)] per foot, expressed in the pelvis (floating-base) frame, with respect to q_low.
+  It is computed with the base at identity, so "pelvis frame" = Pinocchio's world frame and
+  LOCAL_WORLD_ALIGNED = pelvis-aligned axes at the sole origin.
+- Centroidal momentum matrix A_G (eq. 41-42): `cmm_yaw_low` (A_low, z-angular row, lower-body
+  columns) and `cmm_yaw_up` (A_up, z-angular row, `ARM_QP_JOINTS` columns). With the base at
+  identity and at rest, the yaw angular momentum about the CoM is
+  h_z = cmm_yaw_low @ dq_low + cmm_yaw_up @ dq_up.
+- kappa(J) (eq. 45): `condition_number(J)` = sigma_max / sigma_min.
+
+Conventions:
+- `pin.buildModelFromMJCF(robot.xml)` (the file with the robot only; `scene.xml` adds the floor
+  via <include>) gives a FreeFlyer root joint named "root" and the 19 hinges in the MJCF order,
+  which is MuJoCo's qpos order. MJCF sites become OP_FRAMEs, so the soles are frames
+  `L_sole` / `R_sole`; bodies are BODY frames.
+- Pinocchio's free-flyer q is [p (3), quat xyzw (4)], MuJoCo's qpos is [p (3), quat wxyz (4)].
+  Pinocchio's free-flyer v is [linear (3), angular (3)] both in the base (local) frame; MuJoCo's
+  qvel has the linear part in the world frame and the angular part in the body frame.
+  `from_mujoco(qpos, qvel)` converts.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pinocchio as pin
+
+from models.dyros_jet import (
+    ARM_QP_JOINTS,
+    FOOT_SITES,
+    HIP_BODIES,
+    JOINTS,
+    LEG_LENGTH,
+    LOWER_JOINTS,
+    ROBOT_XML,
+)
+
+_ANKLE_JOINTS = ("L_ankle_roll", "R_ankle_roll")  # joint origin = ankle point
+
+
+@dataclass(frozen=True)
+class KinState:
+    """Kinematic quantities with the base (pelvis) at the identity pose."""
+
+    T_pelvis_left_sole: np.ndarray  # (4,4) sole pose in the pelvis frame
+    T_pelvis_right_sole: np.ndarray  # (4,4)
+    p_pelvis_com: np.ndarray  # (3,)
+    J_low: np.ndarray  # (12,13): [left v, left w, right v, right w] x LOWER_JOINTS
+    cmm_yaw_low: np.ndarray  # (13,)
+    cmm_yaw_up: np.ndarray  # (4,)
+    p_pelvis_hips: np.ndarray  # (2,3) left/right hip points
+    p_pelvis_ankles: np.ndarray  # (2,3) left/right ankle points
+
+
+class RobotKinematics:
+    """Pinocchio model of the robot plus the few quantities the walking controller needs."""
+
+    def __init__(self, mjcf_path: str | Path = ROBOT_XML):
+        self.model = pin.buildModelFromMJCF(str(mjcf_path))
+        m = self.model
+        if m.joints[1].shortname() != "JointModelFreeFlyer":
+            raise ValueError("expected a free-flyer root joint in the MJCF")
+        # MuJoCo's free-joint qpos is the absolute body pose: the joint placement must be identity.
+        m.jointPlacements[1] = pin.SE3.Identity()
+        self.data = m.createData()
+        names = list(m.names)
+        if tuple(names[2:]) != JOINTS:
+            raise ValueError(f"joint order differs from models.dyros_jet.JOINTS: {names[2:]}")
+        self.n_joints = m.nv - 6
+        self.lower_v_idx = np.array([m.joints[m.getJointId(n)].idx_v for n in LOWER_JOINTS])
+        self.arm_qp_v_idx = np.array([m.joints[m.getJointId(n)].idx_v for n in ARM_QP_JOINTS])
+        self.arm_qp_joint_idx = np.array([JOINTS.index(n) for n in ARM_QP_JOINTS])
+        self.q_min = m.lowerPositionLimit[7:].copy()
+        self.q_max = m.upperPositionLimit[7:].copy()
+        self.sole_frame_ids = tuple(m.getFrameId(s, pin.OP_FRAME) for s in FOOT_SITES)
+        self.hip_frame_ids = tuple(m.getFrameId(b, pin.BODY) for b in HIP_BODIES)
+        self.ankle_joint_ids = tuple(m.getJointId(j) for j in _ANKLE_JOINTS)
+        self.total_mass = float(pin.computeTotalMass(m))
+
+    # ------------------------------------------------------------------ configurations
+    def configuration(self, q_joints, p_world_base=(0.0, 0.0, 0.0),
+                      quat_wxyz=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
+        """Pinocchio q from joint angles (19,), base position and MuJoCo-order quaternion."""
+        w, x, y, z = np.asarray(quat_wxyz, dtype=float)
+        q = np.empty(self.model.nq)
+        q[:3] = p_world_base
+        q[3:7] = (x, y, z, w)
+        q[7:] = q_joints
+        return q
+
+    def from_mujoco(self, qpos: np.ndarray, qvel: np.ndarray | None = None):
+        """(q, v) for Pinocchio from MuJoCo qpos (26,) and qvel (25,) (v is None if qvel is)."""
+        q = self.configuration(qpos[7:], qpos[:3], qpos[3:7])
+        if qvel is None:
+            return q, None
+        v = np.array(qvel, dtype=float)
+        R = pin.Quaternion(q[6], q[3], q[4], q[5]).normalized().toRotationMatrix()
+        v[:3] = R.T @ qvel[:3]  # world-frame linear velocity -> base frame
+        return q, v
+
+    # ------------------------------------------------------------------ main computation
+    def compute(self, q_joints: np.ndarray) -> KinState:
+        """All controller quantities in one pass, with the base at identity (pelvis = world)."""
+        m, d = self.model, self.data
+        q = self.configuration(q_joints)
+        Ag = pin.computeCentroidalMap(m, d, q)  # forward kinematics + CoM + A_G (about the CoM)
+        pin.computeJointJacobians(m, d)  # uses the kinematics just computed
+        pin.updateFramePlacements(m, d)
+        lws = pin.LOCAL_WORLD_ALIGNED
+        fl, fr = self.sole_frame_ids
+        J_low = np.vstack((
+            pin.getFrameJacobian(m, d, fl, lws)[:, self.lower_v_idx],
+            pin.getFrameJacobian(m, d, fr, lws)[:, self.lower_v_idx],
+        ))
+        return KinState(
+            T_pelvis_left_sole=d.oMf[fl].homogeneous.copy(),
+            T_pelvis_right_sole=d.oMf[fr].homogeneous.copy(),
+            p_pelvis_com=d.com[0].copy(),
+            J_low=J_low,
+            cmm_yaw_low=Ag[5, self.lower_v_idx].copy(),
+            cmm_yaw_up=Ag[5, self.arm_qp_v_idx].copy(),
+            p_pelvis_hips=np.array([d.oMf[i].translation for i in self.hip_frame_ids]),
+            p_pelvis_ankles=np.array([d.oMi[j].translation for j in self.ankle_joint_ids]),
+        )
+
+    def com_world(self, q_joints, p_world_base, quat_wxyz) -> np.ndarray:
+        """Whole-body CoM (3,) in the world for a given base pose (quaternion wxyz)."""
+        q = self.configuration(q_joints, p_world_base, quat_wxyz)
+        return pin.centerOfMass(self.model, self.data, q, False).copy()
+
+    def sole_pose_pelvis(self, q_joints, side: int) -> np.ndarray:
+        """(4,4) pose of the sole of `side` (0 left, 1 right) in the pelvis frame."""
+        m, d = self.model, self.data
+        pin.forwardKinematics(m, d, self.configuration(q_joints))
+        return pin.updateFramePlacement(m, d, self.sole_frame_ids[side]).homogeneous.copy()
+
+    def support_anchored_base(self, q_joints, side: int, p_world_sole: np.ndarray) -> np.ndarray:
+        """Base position (identity orientation) putting the sole of `side` at `p_world_sole`.
+
+        This is how a real robot estimates its base (and so its CoM) from joint encoders:
+        the support foot is assumed to stay where it was planted.
+        """
+        T = self.sole_pose_pelvis(q_joints, side)
+        return np.asarray(p_world_sole, dtype=float) - T[:3, 3]
+
+
+def condition_number(J: np.ndarray) -> float:
+    """kappa(J) = sigma_max / sigma_min by SVD (eq. 45); inf if J is (numerically) singular."""
+    s = np.linalg.svd(np.asarray(J, dtype=float), compute_uv=False)
+    if s.size == 0 or s[0] == 0.0 or s[-1] <= s[0] * np.finfo(float).eps:
+        return float("inf")
+    return float(s[0] / s[-1])
+
+
+def leg_reach(kin: KinState) -> np.ndarray:
+    """(2,) hip-to-ankle distance / LEG_LENGTH for the left and right leg (1 = straight)."""
+    return np.linalg.norm(kin.p_pelvis_hips - kin.p_pelvis_ankles, axis=1) / LEG_LENGTH

@@ -1,0 +1,343 @@
+"""One control tick chaining the paper's layers (Fig. 3), at 200 Hz.
+
+Order of a tick (SPEC.md section 2):
+ 1. footstep plan (re-planned from the next step when walking parameters change),
+ 2. ZMP reference and 3. CoM MPC (eq. 10-18), predicted CoM (eq. 25-26),
+ 4. pelvis position (eq. 19), 5. foot trajectories (eq. 20-21),
+ 6. reference pelvic angle over the horizon (eq. 27-33),
+ 7. pelvic-rotation MPC (eq. 34-38, method ``mpc`` only),
+ 8. QP inverse kinematics of the 13 lower-body joints (eq. 39-40),
+ 9. arm swing on the centroidal momentum matrix (eq. 41-43),
+10. joint targets for the position servos.
+
+Paper symbols -> names here:
+    X_pel (eq. 19)            -> ``p_world_pelvis_des``
+    X_c^d, X_c^m (eq. 19)     -> ``p_world_com_des``, ``p_world_com_meas``
+    K_p (eq. 19)              -> ``params.com.pelvis_gain``
+    theta_pel, theta_dot      -> ``WalkerState.theta``, ``WalkerState.theta_dot``
+    q_low, q_up (eq. 6-7)     -> ``q_cmd[lower]``, ``q_cmd[arms]``
+    h_low^yaw, h_up^yaw       -> ``TickOutput.h_low``, ``TickOutput.h_up``
+
+Choices where the paper is vague (documented here once):
+- Eq. (19) is applied with a feed-forward term: the desired pelvis moves with the desired CoM
+  and the ``K_p`` term slowly removes the offset between the desired CoM and the CoM measured
+  from the *measured* joint angles with the support sole anchored at its planned foothold (as
+  a real robot would estimate it). Without the feed-forward the pelvis would lag the moving CoM
+  by v dt / K_p; with K_p = 1 (deadbeat) the servo delay makes it oscillate.
+- The IK runs on the *commanded* joint state (closed-loop IK on q_cmd), so nothing drifts;
+  the desired foot velocity is the feed-forward plus ``ik.foot_gain`` times the pose error.
+- The waist angle fed to the pelvic MPC is the commanded waist angle; its rate is the MPC's
+  own integrated rate (eq. 38).
+- ``controller/`` never reads a clock: the caller may pass ``clock`` (e.g. time.perf_counter)
+  to get per-layer timings; without it the timings are zero.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from controller.arm_swing import build_arm_qp, solve_arm
+from controller.com_mpc import ComMpc, ComPlan
+from controller.footsteps import LEFT, RIGHT, FootstepPlan, plan_footsteps
+from controller.ik import build_ik, foot_velocity_command, solve_ik
+from controller.kinematics import KinState, RobotKinematics, condition_number, leg_reach
+from controller.params import ControllerParams, horizon_samples
+from controller.pelvis_mpc import PelvisMpc, PelvisPlan
+from controller.pelvis_reference import reference_pelvic_angles
+from controller.qp import QpSolver
+from controller.swing import foot_trajectories
+
+LAYERS = ("kinematics", "com_mpc", "pelvis_mpc", "ik", "arm_swing")
+
+
+@dataclass(frozen=True)
+class TickOutput:
+    """Everything one tick produced: joint targets plus what the displays and metrics need."""
+
+    t: float  # [s] time of the tick
+    q_target: np.ndarray  # (n_joints,) joint position targets for the servos [rad]
+    q_dot: np.ndarray  # (n_joints,) commanded joint velocities [rad/s]
+    com_plan: ComPlan  # predicted CoM over the horizon (eq. 25-26)
+    theta_ref: np.ndarray  # (N,) reference pelvic angle over the horizon (eq. 33) [rad]
+    pelvis_plan: PelvisPlan | None  # MPC's optimised pelvic angles (method mpc) or None
+    p_world_pelvis_des: np.ndarray  # (3,) desired pelvis position (eq. 19) [m]
+    p_world_com_des: np.ndarray  # (2,) desired CoM x, y [m]
+    p_world_com_meas: np.ndarray  # (3,) CoM from measured joints, support-anchored [m]
+    p_world_feet_des: np.ndarray  # (2, 3) desired left/right sole positions [m]
+    zmp_ref: np.ndarray  # (2,) ZMP reference now [m]
+    waist_angle: float  # [rad] commanded waist yaw (theta_pel)
+    waist_rate: float  # [rad/s]
+    h_low: float  # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
+    h_up: float  # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
+    kappa: float  # condition number of J for the joints the method moves (eq. 45)
+    reach: np.ndarray  # (2,) hip-to-ankle distance / leg length, left and right
+    step_index: int  # current step (-1 before the first, n after the last)
+    in_ssp: bool
+    swing_side: int
+    failures: dict[str, bool]  # which QP failed this tick (layer -> bool)
+    speed_limited: bool  # a joint velocity sat at its limit
+    layer_s: dict[str, float] = field(default_factory=dict)  # [s] time per layer (with clock)
+
+
+class Walker:
+    """The controller of one robot. Owns the plan, the MPC/QP warm starts and the commanded state.
+
+    Args:
+        params: validated controller parameters.
+        kin: Pinocchio kinematics of the same MJCF as the simulation.
+        q_init: (n_joints,) initial joint angles (walk-ready pose) [rad].
+        p_world_pelvis_init: (3,) initial pelvis (base) position [m].
+        backend: QP back-end for the small dense QPs ("osqp" or "daqp"); the CoM MPC uses OSQP.
+        clock: optional zero-argument timer for per-layer timings.
+    """
+
+    def __init__(
+        self,
+        params: ControllerParams,
+        kin: RobotKinematics,
+        q_init: np.ndarray,
+        p_world_pelvis_init: np.ndarray,
+        backend: str = "osqp",
+        clock: Callable[[], float] | None = None,
+    ):
+        self.kin = kin
+        self.clock = clock
+        self.backend = backend
+        self.params = params.validated()
+        self.dt = params.control_dt
+        self.t = 0.0
+        self.q_cmd = np.array(q_init, dtype=float)
+        self.q_init = self.q_cmd.copy()
+        self.lower = np.arange(13)  # q_cmd starts with the 13 lower joints (LOWER_JOINTS order)
+        self.arms = kin.arm_qp_joint_idx  # positions of the 4 arm-QP joints in q_cmd
+        self.p_world_pelvis_des = np.array(p_world_pelvis_init, dtype=float)
+        self.pelvis_height = float(self.p_world_pelvis_des[2])
+
+        ks = kin.compute(self.q_cmd)
+        self.x0 = float(self.p_world_pelvis_des[0] + ks.T_pelvis_left_sole[0, 3])
+        com0 = self.p_world_pelvis_des + ks.p_pelvis_com
+        self.com_height = float(com0[2])
+        self.plan: FootstepPlan = plan_footsteps(params.walk, x0=self.x0)
+        self.com_state = np.zeros((3, 2))
+        self.com_state[0] = com0[:2]
+        self.com_mpc = ComMpc(params.com, self.com_height, self.dt)
+        n = horizon_samples(params.com)
+        self.pelvis_mpc = PelvisMpc(params.pelvis, params.com.sample_time, n, self.dt, backend)
+        self.ik_solver = QpSolver(backend)
+        self.arm_solver = QpSolver(backend)
+        self.theta_dot = 0.0
+        self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
+        self._pending: ControllerParams | None = None
+        self._com_des_prev: np.ndarray | None = None
+
+    # -- parameters --------------------------------------------------------------------------
+    def set_params(self, params: ControllerParams) -> None:
+        """Take new parameters on the next tick (gains, horizon) or next step (walking)."""
+        self._pending = params.validated()
+
+    def _apply_pending(self) -> None:
+        new, self._pending = self._pending, None
+        assert new is not None
+        old = self.params
+        if new.walk != old.walk:
+            self.plan = self.plan.replanned(new.walk, self.t)
+        if new.com != old.com:
+            self.com_mpc.set_params(new.com)
+        if new.pelvis != old.pelvis or new.com.horizon != old.com.horizon or (
+            new.com.sample_time != old.com.sample_time
+        ):
+            self.pelvis_mpc.set_params(new.pelvis, new.com.sample_time, horizon_samples(new.com))
+        if new.method != old.method:
+            self.ik_solver.reset()
+        self.params = new
+
+    @property
+    def finished(self) -> bool:
+        """True once the plan (all steps and the final stand) is over."""
+        return self.t >= self.plan.t_end
+
+    # -- the tick ----------------------------------------------------------------------------
+    def tick(self, q_meas: np.ndarray) -> TickOutput:
+        """Run one control period from the measured joint angles; return the new targets."""
+        if self._pending is not None:
+            self._apply_pending()
+        p = self.params
+        dt = self.dt
+        t = self.t
+        clock = self.clock
+        timings: dict[str, float] = dict.fromkeys(LAYERS, 0.0)
+        failures = dict.fromkeys(self.failure_counts, False)
+
+        def lap(name: str, t0: float) -> float:
+            if clock is None:
+                return 0.0
+            now = clock()
+            timings[name] += now - t0
+            return now
+
+        t0 = clock() if clock else 0.0
+        phase = self.plan.phase(t)
+
+        # 2-3. CoM MPC (eq. 10-18); predicted CoM over the horizon (eq. 25-26).
+        com_plan = self.com_mpc.solve(self.com_state, t, self.plan)
+        if not com_plan.ok:
+            failures["com_mpc"] = True
+        self.com_state = com_plan.next_state
+        p_world_com_des = self.com_state[0].copy()
+        t0 = lap("com_mpc", t0)
+
+        # 4. Pelvis position (eq. 19): measured CoM with the support sole at its foothold.
+        side = phase.support_side
+        sole = self.plan.support_pos[min(max(phase.index, 0), len(self.plan.support_pos) - 1)]
+        if phase.standing or phase.in_dsp:
+            sole = None  # both feet down: anchor on both and average
+        p_world_com_meas = self._measured_com(q_meas, side, sole, t)
+        t0 = lap("kinematics", t0)
+        p_prev = self.p_world_pelvis_des.copy()
+        self.p_world_pelvis_des[:2] += (
+            (p_world_com_des - self._last_com_des(p_world_com_des))
+            + p.com.pelvis_gain * (p_world_com_des - p_world_com_meas[:2])
+        )
+        self.p_world_pelvis_des[2] = self.pelvis_height
+        v_world_pelvis = (self.p_world_pelvis_des - p_prev) / dt
+
+        # 5. Foot trajectories (eq. 20-21) at the next tick and over the horizon.
+        feet_now = foot_trajectories(self.plan, np.array([t + dt]))
+        feet_h = foot_trajectories(self.plan, com_plan.times)
+
+        # 6. Reference pelvic angle over the horizon (eq. 27-33).
+        theta_ref = reference_pelvic_angles(
+            com_plan.com, feet_h.p_left[:, :2], feet_h.p_right[:, :2],
+            p.pelvis.k_pel, p.walk.step_width / 2,
+        )
+
+        # 7. Pelvic-rotation MPC (eq. 34-38).
+        lower, arms = self.lower, self.arms
+        theta = float(self.q_cmd[lower[0]])
+        pelvis_plan: PelvisPlan | None = None
+        waist_rate = 0.0
+        if p.method == "mpc":
+            pelvis_plan = self.pelvis_mpc.solve(theta, self.theta_dot, theta_ref)
+            failures["pelvis_mpc"] = not pelvis_plan.ok
+            waist_rate = pelvis_plan.next_rate
+            self.theta_dot = pelvis_plan.next_rate
+        t0 = lap("pelvis_mpc", t0)
+
+        # 8. QP inverse kinematics (eq. 39-40) on the commanded state.
+        ks: KinState = self.kin.compute(self.q_cmd)
+        t0 = lap("kinematics", t0)
+        p_des_l = feet_now.p_left[0] - self.p_world_pelvis_des
+        p_des_r = feet_now.p_right[0] - self.p_world_pelvis_des
+        v_ff_l = np.concatenate([feet_now.v_left[0] - v_world_pelvis, np.zeros(3)])
+        v_ff_r = np.concatenate([feet_now.v_right[0] - v_world_pelvis, np.zeros(3)])
+        v_des = foot_velocity_command(
+            ks.T_pelvis_left_sole, _pose(p_des_l), v_ff_l,
+            ks.T_pelvis_right_sole, _pose(p_des_r), v_ff_r, p.ik.foot_gain,
+        )
+        q_low = self.q_cmd[lower]
+        qp = build_ik(
+            ks.J_low, v_des, q_low, self.kin.q_min[lower], self.kin.q_max[lower],
+            p.ik, dt, p.method, waist_rate if p.method == "mpc" else None,
+        )
+        q_dot_low, ok = solve_ik(qp, self.ik_solver)
+        if not ok:
+            failures["ik"] = True
+            q_dot_low = np.zeros(13)  # fall back: hold the last command
+        speed_limited = bool(np.any(np.abs(q_dot_low) >= p.ik.joint_speed_limit * 0.999))
+        t0 = lap("ik", t0)
+
+        # 9. Arm swing (eq. 41-43) with the lower-body velocities just computed.
+        q_dot_up = np.zeros(len(arms))
+        if p.arms.enabled:
+            aqp = build_arm_qp(
+                ks.cmm_yaw_low, q_dot_low, ks.cmm_yaw_up, self.q_cmd[arms], self.q_init[arms],
+                self.kin.q_min[arms], self.kin.q_max[arms], p.ik.joint_speed_limit, p.arms, dt,
+            )
+            q_dot_up, ok = solve_arm(aqp, self.arm_solver)
+            if not ok:
+                failures["arm_swing"] = True
+                q_dot_up = np.zeros(len(arms))
+        else:
+            # Arms off: return gently to the initial pose (and stay there).
+            q_dot_up = np.clip((self.q_init[arms] - self.q_cmd[arms]) / 0.2, -1.0, 1.0)
+        t0 = lap("arm_swing", t0)
+
+        # 10. Joint targets (eq. 40).
+        q_dot = np.zeros_like(self.q_cmd)
+        q_dot[lower] = q_dot_low
+        q_dot[arms] = q_dot_up
+        self.q_cmd = self.q_cmd + dt * q_dot
+        for name, failed in failures.items():
+            self.failure_counts[name] += int(failed)
+
+        cols = slice(1, 13) if p.method == "fixed" else slice(0, 13)
+        kappa = condition_number(ks.J_low[:, cols])
+        self.t = t + dt
+        return TickOutput(
+            t=t,
+            q_target=self.q_cmd.copy(),
+            q_dot=q_dot,
+            com_plan=com_plan,
+            theta_ref=theta_ref,
+            pelvis_plan=pelvis_plan,
+            p_world_pelvis_des=self.p_world_pelvis_des.copy(),
+            p_world_com_des=p_world_com_des,
+            p_world_com_meas=p_world_com_meas,
+            p_world_feet_des=np.stack([feet_now.p_left[0], feet_now.p_right[0]]),
+            zmp_ref=self.plan.zmp_reference(np.array([t]))[0],
+            waist_angle=float(self.q_cmd[lower[0]]),
+            waist_rate=float(q_dot_low[0]),
+            h_low=float(ks.cmm_yaw_low @ q_dot_low),
+            h_up=float(ks.cmm_yaw_up @ q_dot_up),
+            kappa=kappa,
+            reach=leg_reach(ks),
+            step_index=phase.index,
+            in_ssp=bool(phase.in_ssp),
+            swing_side=int(phase.swing_side),
+            failures=failures,
+            speed_limited=speed_limited,
+            layer_s=timings,
+        )
+
+    # -- helpers -----------------------------------------------------------------------------
+    def _last_com_des(self, now: np.ndarray) -> np.ndarray:
+        """The desired CoM of the previous tick (for the feed-forward of eq. 19)."""
+        prev = self._com_des_prev
+        self._com_des_prev = now.copy()
+        return now if prev is None else prev
+
+    def _measured_com(
+        self, q_meas: np.ndarray, side: int, sole: np.ndarray | None, t: float
+    ) -> np.ndarray:
+        """CoM from the measured joints, the base placed so the support sole is on its foothold.
+
+        In double support (``sole`` None) the two anchored estimates are averaged.
+        """
+        if sole is not None:
+            base = self.kin.support_anchored_base(q_meas, side, sole)
+            return self.kin.com_world(q_meas, base, (1.0, 0.0, 0.0, 0.0))
+        feet = foot_trajectories(self.plan, np.array([t]))
+        coms = []
+        for s, pos in ((LEFT, feet.p_left[0]), (RIGHT, feet.p_right[0])):
+            base = self.kin.support_anchored_base(q_meas, s, pos)
+            coms.append(self.kin.com_world(q_meas, base, (1.0, 0.0, 0.0, 0.0)))
+        return 0.5 * (coms[0] + coms[1])
+
+    def snapshot_params(self) -> ControllerParams:
+        """The parameters in force (pending ones included)."""
+        return self._pending or self.params
+
+    def replace_params(self, **groups) -> None:
+        """Convenience: ``w.replace_params(walk=dict(step_length=0.3))``."""
+        self.set_params(self.snapshot_params().replace(**groups))
+
+
+def _pose(p: np.ndarray) -> np.ndarray:
+    """4x4 pose with identity rotation (feet flat, facing forward) at position p."""
+    T = np.eye(4)
+    T[:3, 3] = p
+    return T
+
