@@ -67,7 +67,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--horizon", type=_finite, default=None, help="MPC horizon [s]")
     p.add_argument("--no-arms", action="store_true", help="switch the arm swing off")
     p.add_argument("--seed", type=int, default=None)
-    p.add_argument("--backend", choices=("osqp", "daqp"), default="osqp")
+    p.add_argument("--backend", choices=("osqp", "daqp"), default="daqp")
     p.add_argument("--json", type=Path, default=None, help="write the summary here")
     p.add_argument("--csv", type=Path, default=None, help="write the time series here")
 

@@ -45,7 +45,7 @@ class RunConfig:
     seed: int | None = None
     perturbation: float = 0.0  # [rad] std of the seeded initial perturbation (arms, base vel)
     sim_dt: float = 0.001  # [s] MuJoCo timestep
-    backend: str = "osqp"  # QP back-end of the small QPs
+    backend: str = "daqp"  # QP back-end of every layer (daqp exact / osqp)
     settle_time: float = 0.3  # [s] after a fall before the session counts as over (live)
 
 

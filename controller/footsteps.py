@@ -167,10 +167,9 @@ class FootstepPlan:
         a = self.support_pos[k, :2]
         b = np.where(in_ssp[..., None], a, self.swing_from[k, :2])
         before, after = (idx < 0)[..., None], (idx >= self.n)[..., None]
-        a = np.where(before, self.feet_init[LEFT, :2], np.where(after, self.feet_final[LEFT, :2], a))
-        b = np.where(
-            before, self.feet_init[RIGHT, :2], np.where(after, self.feet_final[RIGHT, :2], b)
-        )
+        init, final = self.feet_init[:, :2], self.feet_final[:, :2]
+        a = np.where(before, init[LEFT], np.where(after, final[LEFT], a))
+        b = np.where(before, init[RIGHT], np.where(after, final[RIGHT], b))
         return a, b
 
     def zmp_bounds(self, times: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:

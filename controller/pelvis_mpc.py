@@ -14,21 +14,31 @@ Paper symbols -> code names:
     A_theta, B_theta -> ``self._A``, ``self._B``; P_A_theta, P_B_theta (eq. 35) ->
     ``self._PA`` (2N, 2), ``self._PB`` (2N, N) (rows interleaved [theta_1, theta_dot_1, ...]);
     Theta_angle rows -> ``self._PA_ang``, ``self._PB_ang``; Theta_pel^ref -> ``theta_ref``;
-    Theta_ddot_i (eq. 36) -> the decision variable U (N,); alpha_pel, beta_pel ->
+    Theta_ddot_i (eq. 36) -> U (N,), ``PelvisPlan.acc``; alpha_pel, beta_pel ->
     ``params.alpha``, ``params.beta``; Delta t of eq. (38) -> ``control_dt``.
 
-The decision variable is U only (condensed form); the QP is
-``P = alpha PB_ang' PB_ang + beta I``, ``q = alpha PB_ang' (PA_ang x0 - ref)`` with the
-angle rows ``PB_ang`` and identity rows (acceleration bounds) in ``A``.
+**QP variable: the predicted angles Theta (N,), not U.** P_B's angle rows ``PB_ang`` (N, N)
+are lower triangular with T_p^2/2 on the diagonal, hence invertible, so
+``U = M (Theta - f)`` with ``M = PB_ang^-1`` and the free response ``f = PA_ang x0``. The
+condensed-in-U Hessian ``alpha PB_ang' PB_ang + beta I`` has a condition number of ~1e9 with the
+paper's tiny beta (OSQP then misses the exact optimum by 1e-3..1e-1 rad/s^2 and even reports
+failures); in Theta it is ``alpha I + beta M'M`` (condition ~1 + 6e7 beta / alpha at
+T_p = 0.1 s, N = 16), and beta = 0 is a plain projection. The QP is
+
+    min 1/2 Theta' (alpha I + beta M'M) Theta - (alpha ref + beta M'M f)' Theta
+    s.t. -angle_limit <= Theta <= angle_limit                       (identity rows)
+         s (-acc_limit + M f) <= s M Theta <= s (acc_limit + M f)   (s = T_p^2 / 2 scales rows)
+
+and the inputs (and rates) of the plan are recovered from Theta. The prediction matrices
+P_A, P_B of eq. (35) and M are built once per :meth:`PelvisMpc.set_params`.
 
 Choices where the paper is vague:
 - **Eq. (38)** is applied over *one control period* ``control_dt`` (5 ms), not one MPC sample:
   ``next_rate = theta_dot + control_dt u_0`` and
   ``next_angle = theta + control_dt theta_dot + control_dt^2 / 2 u_0``. ``next_rate`` is the
   waist-yaw velocity the IK pins (eq. 39).
-- The yaw acceleration bound (not in the paper; the authors' code has one) keeps the QP well
-  posed with the tiny input weight beta = 1e-10 of the paper, and beta = 0 is allowed
-  (P_B is lower triangular with T_p^2/2 on the diagonal, so P stays positive definite).
+- The yaw acceleration bound (not in the paper; the authors' code has one) keeps the inputs
+  sane with the tiny input weight beta = 1e-10 of the paper; beta = 0 is allowed.
 - **On failure** (infeasible start, e.g. |theta| beyond the limit with an outward rate the
   acceleration bound cannot stop, or a solver error) the plan is a *brake*: the rate decays to
   0 at the acceleration bound (``u = clip(-theta_dot / control_dt, +-acc_limit)`` in the first
@@ -84,7 +94,9 @@ class PelvisMpc:
     def set_params(self, params: PelvisMpcParams, sample_time: float, n_samples: int) -> None:
         """Rebuild the prediction matrices (eq. 35) and the constant QP parts."""
         if sample_time <= 0.0 or n_samples < 1:
-            raise ValueError(f"need sample_time > 0 and n_samples >= 1 ({sample_time}, {n_samples})")
+            raise ValueError(
+                f"need sample_time > 0 and n_samples >= 1, got {sample_time}, {n_samples}"
+            )
         n = int(n_samples)
         T = float(sample_time)
         shape_changed = getattr(self, "n_samples", None) != n
@@ -104,25 +116,34 @@ class PelvisMpc:
         self._PB = PB  # (2N, N)
         self._PA_ang, self._PB_ang = self._PA[0::2], self._PB[0::2]  # angle rows (N, 2), (N, N)
         self._PA_rate, self._PB_rate = self._PA[1::2], self._PB[1::2]
+        self._M = np.linalg.inv(self._PB_ang)  # (N, N): U = M (Theta - f)
         a, b = params.alpha, params.beta
-        self._P = a * self._PB_ang.T @ self._PB_ang + b * np.eye(n)  # (N, N)
-        self._Acon = np.vstack([self._PB_ang, np.eye(n)])  # (2N, N)
+        self._MtM = self._M.T @ self._M
+        self._P = a * np.eye(n) + b * self._MtM  # (N, N)
+        self._acc_scale = 0.5 * T * T  # s: makes the acceleration rows O(1)
+        self._Acon = np.vstack([np.eye(n), self._acc_scale * self._M])  # (2N, N)
         self._angle_limit = math.radians(params.angle_limit_deg)
         if shape_changed:
             self.solver.reset()
 
     def build(self, theta: float, theta_dot: float, theta_ref: np.ndarray) -> QP:
-        """The QP of eq. (37) for the current state [theta, theta_dot] and reference (N,)."""
+        """The QP of eq. (37) for the state [theta, theta_dot] and reference (N,).
+
+        The QP's variable is the predicted angle vector Theta (N,) (see the module docstring);
+        the inputs are ``self.inputs_from_angles(x, theta, theta_dot)``.
+        """
         ref = np.asarray(theta_ref, dtype=float).reshape(-1)
         n = self.n_samples
         if ref.shape[0] != n:
             raise ValueError(f"theta_ref has {ref.shape[0]} samples, the MPC has {n}")
         x0 = np.array([theta, theta_dot], dtype=float)
-        free = self._PA_ang @ x0  # (N,) angles with zero input
-        q = self.params.alpha * self._PB_ang.T @ (free - ref)
-        lim, acc = self._angle_limit, self.params.acc_limit
-        lo = np.concatenate([-lim - free, np.full(n, -acc)])
-        hi = np.concatenate([lim - free, np.full(n, acc)])
+        free = self._PA_ang @ x0  # (N,) f: angles with zero input
+        a, b = self.params.alpha, self.params.beta
+        q = -a * ref - b * self._MtM @ free
+        lim, acc, s = self._angle_limit, self.params.acc_limit, self._acc_scale
+        mf = s * self._M @ free
+        lo = np.concatenate([np.full(n, -lim), -acc * s + mf])
+        hi = np.concatenate([np.full(n, lim), acc * s + mf])
         return QP(self._P, q, self._Acon, lo, hi)
 
     def solve(self, theta: float, theta_dot: float, theta_ref: np.ndarray) -> PelvisPlan:
@@ -130,11 +151,11 @@ class PelvisMpc:
         qp = self.build(theta, theta_dot, theta_ref)
         ref = np.asarray(theta_ref, dtype=float).reshape(-1)
         res = self.solver.solve(qp)
+        x0 = np.array([theta, theta_dot], dtype=float)
         if res.ok:
-            u = res.x
+            u = self._M @ (res.x - self._PA_ang @ x0)  # (N,) inputs from the angles
         else:
             u = self._brake(theta_dot)
-        x0 = np.array([theta, theta_dot], dtype=float)
         angles = self._PA_ang @ x0 + self._PB_ang @ u
         rates = self._PA_rate @ x0 + self._PB_rate @ u
         dt = self.control_dt
@@ -145,6 +166,10 @@ class PelvisMpc:
         next_rate = theta_dot + dt * u0
         next_angle = theta + dt * theta_dot + 0.5 * dt * dt * u0
         return PelvisPlan(angles, rates, u.copy(), ref.copy(), next_angle, next_rate, res.ok)
+
+    def inputs_from_angles(self, angles: np.ndarray, theta: float, theta_dot: float) -> np.ndarray:
+        """U (N,) [rad/s^2] that produces the predicted angles (N,) from [theta, theta_dot]."""
+        return self._M @ (np.asarray(angles, dtype=float) - self._PA_ang @ [theta, theta_dot])
 
     def _brake(self, theta_dot: float) -> np.ndarray:
         """Inputs (N,) that bring the rate to 0 at the acceleration bound, then hold."""

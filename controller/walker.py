@@ -90,7 +90,7 @@ class Walker:
         kin: Pinocchio kinematics of the same MJCF as the simulation.
         q_init: (n_joints,) initial joint angles (walk-ready pose) [rad].
         p_world_pelvis_init: (3,) initial pelvis (base) position [m].
-        backend: QP back-end for the small dense QPs ("osqp" or "daqp"); the CoM MPC uses OSQP.
+        backend: QP back-end of every layer ("daqp": exact active set, the default; "osqp").
         clock: optional zero-argument timer for per-layer timings.
     """
 
@@ -100,7 +100,7 @@ class Walker:
         kin: RobotKinematics,
         q_init: np.ndarray,
         p_world_pelvis_init: np.ndarray,
-        backend: str = "osqp",
+        backend: str = "daqp",
         clock: Callable[[], float] | None = None,
     ):
         self.kin = kin
@@ -123,7 +123,7 @@ class Walker:
         self.plan: FootstepPlan = plan_footsteps(params.walk, x0=self.x0)
         self.com_state = np.zeros((3, 2))
         self.com_state[0] = com0[:2]
-        self.com_mpc = ComMpc(params.com, self.com_height, self.dt)
+        self.com_mpc = ComMpc(params.com, self.com_height, self.dt, backend)
         n = horizon_samples(params.com)
         self.pelvis_mpc = PelvisMpc(params.pelvis, params.com.sample_time, n, self.dt, backend)
         self.ik_solver = QpSolver(backend)

@@ -47,12 +47,6 @@ def test_zmp_and_velocity_difference_matrices():
     np.testing.assert_allclose(mpc.dvel_from_state @ x0 + mpc.dvel_from_jerk @ u, np.diff(v))
 
 
-def _const_plan_solve(mpc, state, ref, half=0.05):
-    N = mpc.N
-    zr = np.tile(ref, (N, 1))
-    return mpc.build(state, zr, zr - half, zr + half)
-
-
 def test_tracks_constant_zmp_reference():
     mpc = ComMpc(PARAMS, ZC)
     walk = WalkParams(n_steps=1)
@@ -122,11 +116,24 @@ def test_zero_alpha_ignores_the_reference(state_xy, ref):
     mpc = ComMpc(dataclasses.replace(PARAMS, alpha=0.0), ZC, backend="daqp")
     state = np.zeros((3, 2))
     state[0] = state_xy
-    qp = _const_plan_solve(mpc, state, np.array(ref), half=1.0)
-    lo = np.asarray(ref) - 1.0
-    qp = qp._replace(l=np.repeat(lo - state[0], mpc.N), u=np.repeat(lo + 2.0 - state[0], mpc.N))
-    np.testing.assert_allclose(solve_exact(qp), 0.0, atol=1e-9)
+    zr = np.tile(ref, (mpc.N, 1))
+    qp = mpc.build(state, zr, zr - 1.0, zr + 1.0)
     np.testing.assert_allclose(qp.q, 0.0, atol=1e-15)
+    np.testing.assert_allclose(solve_exact(qp), 0.0, atol=1e-9)
+
+
+@pytest.mark.parametrize("backend", ["osqp", "daqp"])
+def test_bounds_hold_when_the_reference_is_outside(backend):
+    """A reference 0.2 m away and bounds of +/-0.05 m: the ZMP stops at the bound."""
+    mpc = ComMpc(PARAMS, ZC, backend=backend)
+    zr = np.full((mpc.N, 2), 0.2)
+    lo, hi = np.full((mpc.N, 2), -0.05), np.full((mpc.N, 2), 0.05)
+    qp = mpc.build(np.zeros((3, 2)), zr, lo, hi)
+    r = mpc.solver.solve(qp)
+    assert r.ok
+    z = qp.A @ r.x  # ZMP minus its zero-jerk part (zero from rest at the origin)
+    assert np.all(z <= 0.05 + 1e-6) and np.all(z >= -0.05 - 1e-6)
+    assert z.max() == pytest.approx(0.05, abs=1e-6)
 
 
 def test_failure_falls_back_to_shifted_previous_jerks():
