@@ -20,10 +20,11 @@ Paper symbols -> code names:
 **QP variable: the predicted angles Theta (N,), not U.** P_B's angle rows ``PB_ang`` (N, N)
 are lower triangular with T_p^2/2 on the diagonal, hence invertible, so
 ``U = M (Theta - f)`` with ``M = PB_ang^-1`` and the free response ``f = PA_ang x0``. The
-condensed-in-U Hessian ``alpha PB_ang' PB_ang + beta I`` has a condition number of ~1e9 with the
-paper's tiny beta (OSQP then misses the exact optimum by 1e-3..1e-1 rad/s^2 and even reports
-failures); in Theta it is ``alpha I + beta M'M`` (condition ~1 + 6e7 beta / alpha at
-T_p = 0.1 s, N = 16), and beta = 0 is a plain projection. The QP is
+Hessian condensed onto U, ``alpha PB_ang' PB_ang + beta I``, has a condition number of 6e5
+(beta 1e-6) to 4e7 (beta 1e-10, the paper's): OSQP then misses the exact optimum by
+1e-3..1e-1 rad/s^2 and even reports failures. Onto Theta it is ``alpha I + beta M'M``
+(condition ~1 + 6e7 beta / alpha at T_p = 0.1 s, N = 16: 63 at beta 1e-6, 1.006 at 1e-10),
+and beta = 0 is a plain projection. The QP is
 
     min 1/2 Theta' (alpha I + beta M'M) Theta - (alpha ref + beta M'M f)' Theta
     s.t. -angle_limit <= Theta <= angle_limit                       (identity rows)
@@ -70,7 +71,7 @@ class PelvisPlan:
 
 
 class PelvisMpc:
-    """Condensed pelvic-rotation MPC (eq. 34-38) with a warm-started QP solver."""
+    """Pelvic-rotation MPC (eq. 34-38), condensed onto the angles, with a warm-started solver."""
 
     def __init__(
         self,
