@@ -23,6 +23,12 @@ from controller.walker import TickOutput, Walker
 from models.dyros_jet import ROBOT_XML
 
 GRAVITY = 9.81
+# A walk is "clean" (the issues' criterion for the longest step) when it succeeds with every
+# landing within 2 cm, no QP failure, no servo saturation, no joint at its speed limit, and the
+# legs never at the straight-knee singularity: kappa(J) above this bound means the knee is
+# within ~0.01 rad of straight (kappa 1283 there, 128 at 0.1 rad: tests/test_kinematics.py).
+KAPPA_SINGULAR = 1000.0
+LANDING_ERROR_CLEAN = 0.02  # [m]
 SUMMARY_KEYS = (
     "method", "arms", "step_length", "step_time", "steps_planned", "steps_completed",
     "success", "fell", "fall_time", "landing_error_max", "waist_yaw_max_deg",
@@ -240,8 +246,9 @@ class Session:
             "clean": bool(
                 success
                 and landed
-                and max(landed) < 0.02
+                and max(landed) < LANDING_ERROR_CLEAN
                 and failures == 0
+                and peak("kappa") < KAPPA_SINGULAR
                 and self.world.saturated_substeps == 0
                 and self.speed_limited_ticks == 0
             ),
