@@ -1,0 +1,190 @@
+"""The live simulation thread: intent in, frames out, pacing, plan restarts and falls."""
+
+from __future__ import annotations
+
+import threading
+
+import numpy as np
+import pytest
+
+from app.web.live import (
+    FALL_RESET_S,
+    LiveSim,
+    check_methods,
+    live_params,
+    step_length_in_force,
+)
+from controller.footsteps import plan_footsteps
+from controller.params import ControllerParams, WalkParams
+
+DT = ControllerParams().control_dt
+
+
+class FakeWallClock:
+    """A wall clock that moves only when the loop sleeps (the loop's compute looks free)."""
+
+    def __init__(self) -> None:
+        self.now = 0.0
+        self.slept = 0.0
+        self.lock = threading.Lock()
+
+    def clock(self) -> float:
+        with self.lock:
+            return self.now
+
+    def sleep(self, seconds: float) -> None:
+        with self.lock:
+            self.now += seconds
+            self.slept += seconds
+
+
+def short_params(n_steps: int = 1) -> ControllerParams:
+    return ControllerParams().replace(walk={"n_steps": n_steps})
+
+
+def test_check_methods_orders_and_rejects():
+    assert check_methods(["mpc", "fixed", "mpc"]) == ("fixed", "mpc")
+    with pytest.raises(ValueError, match="unknown method 'walk'"):
+        check_methods(["walk"])
+    with pytest.raises(ValueError, match="at least one"):
+        check_methods([])
+
+
+def test_live_params_have_a_long_plan():
+    assert live_params().walk.n_steps == 200
+
+
+def test_intent_is_validated_and_versioned():
+    sim = LiveSim(short_params())
+    v0 = sim.intent.version
+    v1 = sim.update_params(walk={"step_length": 0.3})
+    assert v1 == v0 + 1 and sim.intent.params.walk.step_length == 0.3
+    with pytest.raises(ValueError, match="step_length"):
+        sim.update_params(walk={"step_length": 0.9})
+    with pytest.raises(ValueError, match="speed"):
+        sim.set_speed(float("nan"))
+    assert sim.intent.params.walk.step_length == 0.3  # a rejected change leaves it alone
+
+
+def test_step_length_in_force_follows_the_plan():
+    plan = plan_footsteps(WalkParams(step_length=0.25, n_steps=4))
+    assert step_length_in_force(plan, -1) == pytest.approx(0.25)
+    assert step_length_in_force(plan, 2) == pytest.approx(0.25)
+    replanned = plan.replanned(WalkParams(step_length=0.35, n_steps=4), plan.step_start[1] + 0.1)
+    assert step_length_in_force(replanned, 1) == pytest.approx(0.25)
+    assert step_length_in_force(replanned, 2) == pytest.approx(0.35)
+
+
+def test_pacing_sleeps_to_the_wall_clock():
+    """With free compute, the loop sleeps simulated time / speed on the wall clock."""
+    wall = FakeWallClock()
+    sim = LiveSim(short_params(3), methods=["fixed"], speed=2.0, clock=wall.clock,
+                  sleep=wall.sleep).start()
+    try:
+        frame = sim.wait_frame(timeout=30)
+        while frame is not None and frame.clock < 1.5:
+            frame = sim.wait_frame(frame.seq, timeout=30)
+        assert frame is not None
+        assert frame.realtime_factor == pytest.approx(2.0, rel=0.05)
+        frame = sim.wait_applied(sim.pause(), timeout=10)
+        # The wall clock is at (simulated time / speed), give or take a tick.
+        assert wall.slept == pytest.approx(frame.clock / 2.0, abs=2 * DT)
+    finally:
+        sim.stop()
+
+
+@pytest.fixture
+def running():
+    sims: list[LiveSim] = []
+
+    def make(**kw) -> LiveSim:
+        sim = LiveSim(**kw).start()
+        sims.append(sim)
+        assert sim.wait_frame(timeout=30) is not None
+        return sim
+
+    yield make
+    for sim in sims:
+        sim.stop()
+        assert sim.error is None
+
+
+def _advance(sim: LiveSim, frames: int = 3):
+    f = sim.frame()
+    for _ in range(frames):
+        f = sim.wait_frame(f.seq, timeout=10)
+    return f
+
+
+def test_pause_step_and_reset(running):
+    sim = running(params=short_params(3), methods=["fixed", "mpc"])
+    f = sim.wait_applied(sim.pause(), timeout=10)
+    t = [r.t for r in f.robots]
+    f = _advance(sim)
+    assert [r.t for r in f.robots] == t  # paused: time stands still
+    f = sim.wait_applied(sim.step(), timeout=10)
+    assert [r.t for r in f.robots] == pytest.approx([x + DT for x in t], abs=1e-9)
+    sim.step()
+    f = sim.wait_applied(sim.step(), timeout=10)  # two more single steps
+    assert [r.t for r in f.robots] == pytest.approx([x + 3 * DT for x in t], abs=1e-9)
+    f = sim.wait_applied(sim.reset(), timeout=10)
+    assert all(r.t <= DT + 1e-9 for r in f.robots)
+    f = sim.wait_applied(sim.resume(), timeout=10)
+    assert _advance(sim).robots[0].t > f.robots[0].t
+
+
+def test_params_reach_every_walker_and_methods_rebuild(running):
+    sim = running(params=short_params(3), methods=["fixed", "mpc"])
+    f = sim.wait_applied(sim.update_params(com={"alpha": 2.0}, walk={"step_length": 0.25}))
+    f = _advance(sim)
+    for r in f.robots:
+        assert r.params.com.alpha == 2.0 and r.params.walk.step_length == 0.25
+        assert r.params.method == r.method
+    for method, robot in sim.robots.items():
+        assert robot.session.walker.params.com.alpha == 2.0
+        assert robot.session.walker.params.method == method
+    f = sim.wait_applied(sim.set_methods(["redundancy", "fixed", "mpc"]))
+    assert [r.method for r in f.robots] == ["fixed", "redundancy", "mpc"]
+    assert [r.slot for r in f.robots] == [0, 1, 2]
+    assert all(r.t < 0.5 for r in f.robots)  # restarted together
+
+
+def test_a_finished_plan_restarts(running):
+    sim = running(params=short_params(1), methods=["mpc"], speed=4.0)
+    f = sim.frame()
+    while f is not None and f.robots[0].walks_completed == 0:
+        f = sim.wait_frame(f.seq, timeout=60)
+    assert f is not None
+    r = f.robots[0]
+    assert r.walks_completed == 1 and r.last_walk_success is True and r.t < 0.5
+    assert np.all(np.isfinite(r.body_xpos))
+
+
+def test_a_fallen_robot_is_reset_after_a_while(running):
+    sim = running(params=short_params(3), methods=["fixed", "mpc"], speed=4.0)
+    sim.wait_applied(sim.pause())
+    robot = sim.robots["fixed"]
+    robot.session.fell = True  # as the world's fall check would mark it
+    robot.session.fall_reason = "test: marked as fallen"
+    f = sim.wait_applied(sim.step())
+    fixed = f.robots[0]
+    assert fixed.fell and fixed.falls == 1 and fixed.last_walk_success is False
+    assert not f.robots[1].fell
+    sim.resume()
+    while f is not None and f.robots[0].falls == 1 and f.robots[0].fell:
+        f = sim.wait_frame(f.seq, timeout=30)
+    assert f is not None and not f.robots[0].fell and f.robots[0].t < 0.5
+    assert f.robots[1].t > FALL_RESET_S  # the other robot walked on
+
+
+def test_history_has_one_column_set_per_method(running):
+    sim = running(params=short_params(3), methods=["fixed", "mpc"], speed=4.0)
+    f = sim.frame()
+    while f is not None and (f.history is None or len(f.history.clock) < 20):
+        f = sim.wait_frame(f.seq, timeout=30)
+    h = f.history
+    assert set(h.values) == {"fixed", "mpc"}
+    for arr in h.values.values():
+        assert arr.shape == (len(h.clock), len(h.columns))
+        assert np.all(np.isfinite(arr[:, h.columns.index("waist_deg")]))
+    assert np.all(np.diff(h.clock) > 0)
