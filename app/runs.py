@@ -163,9 +163,8 @@ class Session:
         n = len(plan.step_start)
         if 0 <= k < n and k not in self.energy_at_step_start:
             self.energy_at_step_start[k] = float(world.energy_per_joint.sum())
-        for j in range(n):
-            if j in self.landings:
-                continue
+        j = len(self.landings)  # landings are recorded in order: the first one not yet checked
+        if j < n:
             check_time = plan.step_start[j] + plan.walk.step_time + 0.5 * plan.dsp_time
             if t >= check_time and not self.fell:
                 soles = world.sole_positions()
@@ -173,7 +172,6 @@ class Session:
                 landed = soles[side, :2] - soles[1 - side, :2]
                 planned = plan.swing_to[j, :2] - plan.support_pos[j, :2]
                 self.landings[j] = float(np.linalg.norm(landed - planned))
-            break
 
         # Falls (SPEC 4).
         if not self.fell:

@@ -71,10 +71,21 @@ def build_arm_qp(
     h_low = yaw_momentum(a_low_yaw, q_dot_low)
     r = np.asarray(q_up_init, dtype=float) - q  # (4,) pose error [rad]
     w1, w2, w3 = params.omega1, params.omega2, params.omega3
-    P = w1 * np.outer(a, a) + (w2 * dt * dt + w3) * np.eye(n)
+    P = w1 * (a[:, None] * a[None, :])  # omega1 a a'
+    P.flat[:: n + 1] += w2 * dt * dt + w3  # + (omega2 dt^2 + omega3) I
     c = w1 * h_low * a - w2 * dt * r
     lo, hi = velocity_bounds(q, q_min, q_max, dt, qd_max)
-    return QP(P, c, np.eye(n), lo, hi)
+    return QP(P, c, _bound_rows(n), lo, hi)
+
+
+_BOUND_ROWS: dict[int, np.ndarray] = {}
+
+
+def _bound_rows(n: int) -> np.ndarray:
+    """(n, n) identity, one shared object per size (the QP solver tracks A by identity)."""
+    if n not in _BOUND_ROWS:
+        _BOUND_ROWS[n] = np.eye(n)
+    return _BOUND_ROWS[n]
 
 
 def solve_arm(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:

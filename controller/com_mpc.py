@@ -154,6 +154,7 @@ class ComMpc:
         self._q_zmp = params.alpha * Pzu.T  # (N, N)
         self._q_dv = params.beta * Pdu.T @ self.dvel_from_state  # (N, 3)
         self.A_ctrl, self.B_ctrl = lipm_discrete(self.control_dt)
+        self._sample_offsets = self.T * np.arange(1, N + 1)  # (N,) k T_p [s]
         if old_n is not None and old_n != N:
             self.solver.reset()
             self._prev_jerk = None
@@ -190,7 +191,7 @@ class ComMpc:
 
     def sample_times(self, t: float) -> np.ndarray:
         """(N,) [s] the predicted samples' absolute times t + k T_p, k = 1..N."""
-        return t + self.T * np.arange(1, self.N + 1)
+        return t + self._sample_offsets
 
     def solve(self, state: np.ndarray, t: float, plan: FootstepPlan) -> ComPlan:
         """Solve eq. (18) at time ``t`` [s] from ``state`` (3, 2) along ``plan``.
@@ -199,10 +200,28 @@ class ComMpc:
             The predicted horizon (eq. 25-26) and the state after one control period.
         """
         assert self.params is not None
-        x0 = np.asarray(state, dtype=float)
         times = self.sample_times(t)
-        ref = plan.zmp_reference(times)
-        lo, hi = plan.zmp_bounds(times, self.params.zmp_margin)
+        ref, lo, hi = plan.zmp_reference_and_bounds(times, self.params.zmp_margin)
+        return self.solve_references(state, t, times, ref, lo, hi)
+
+    def solve_references(
+        self,
+        state: np.ndarray,
+        t: float,
+        times: np.ndarray,
+        ref: np.ndarray,
+        lo: np.ndarray,
+        hi: np.ndarray,
+    ) -> ComPlan:
+        """:meth:`solve` with the plan's queries already made by the caller.
+
+        Args:
+            state: (3, 2) CoM state now; t: [s] time now.
+            times: (N,) ``self.sample_times(t)``.
+            ref, lo, hi: (N, 2) [m] ZMP reference and bounds at ``times`` (the plan's, with
+                ``params.zmp_margin``).
+        """
+        x0 = np.asarray(state, dtype=float)
         qp = self.build(x0, ref, lo, hi)
         self.last_qp = qp
         res = self.solver.solve(qp)
@@ -218,7 +237,7 @@ class ComMpc:
         traj = self.state_from_state @ x0 + self.state_from_jerk @ jerk  # (3N, 2)
         com, vel, acc = traj[:N], traj[N : 2 * N], traj[2 * N :]
         zmp = self.zmp_from_state @ x0 + self.zmp_from_jerk @ jerk
-        next_state = self.A_ctrl @ x0 + np.outer(self.B_ctrl, jerk[0])
+        next_state = self.A_ctrl @ x0 + self.B_ctrl[:, None] * jerk[0]  # A x0 + B u0
         return ComPlan(
             times=times, com=com, com_vel=vel, zmp=zmp, zmp_ref=ref, jerk=jerk,
             next_state=next_state, ok=bool(res.ok), com_acc=acc, zmp_lo=lo, zmp_hi=hi,

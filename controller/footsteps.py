@@ -42,7 +42,9 @@ Choices where the paper is vague:
 from __future__ import annotations
 
 import dataclasses
+from bisect import bisect_right
 from dataclasses import dataclass
+from functools import cached_property
 from typing import NamedTuple
 
 import numpy as np
@@ -102,18 +104,34 @@ class FootstepPlan:
         """Number of steps, the closing step included."""
         return int(self.step_start.shape[0])
 
-    @property
+    @cached_property
     def walk_end(self) -> float:
         """[s] end of the last (closing) step."""
         return float(self.step_start[-1] + self.step_duration[-1])
 
+    @cached_property
+    def _rows(self) -> _PlanRows:
+        """The per-step arrays as Python lists, for the scalar (one-instant) queries."""
+        return _PlanRows(self)
+
     def _locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """Clamped times, step index (-1..n), index clipped to 0..n-1, time into that step."""
-        t = np.clip(np.asarray(times, dtype=float), 0.0, self.t_end)
+        # np.minimum(np.maximum(.)) is np.clip without its Python-level overhead
+        t = np.minimum(np.maximum(np.asarray(times, dtype=float), 0.0), self.t_end)
         idx = np.searchsorted(self.step_start, t, side="right") - 1
         idx = np.where(t >= self.walk_end, self.n, idx)
-        k = np.clip(idx, 0, self.n - 1)
+        k = np.minimum(np.maximum(idx, 0), self.n - 1)
         return t, idx, k, t - self.step_start[k]
+
+    def _locate_one(self, t: float) -> tuple[float, int, int, float]:
+        """:meth:`_locate` for one instant, in Python scalars (same arithmetic)."""
+        r = self._rows
+        t = min(max(float(t), 0.0), self.t_end)
+        idx = bisect_right(r.start, t) - 1
+        if t >= self.walk_end:
+            idx = r.n
+        k = min(max(idx, 0), r.n - 1)
+        return t, idx, k, t - r.start[k]
 
     def step_index(self, t: float | np.ndarray) -> int | np.ndarray:
         """Step in progress at ``t``: -1 before the first step, n after the last."""
@@ -122,16 +140,16 @@ class FootstepPlan:
 
     def phase(self, t: float) -> StepPhase:
         """The phase of the plan at time ``t`` [s] (see :class:`StepPhase`)."""
-        _, idx, k, tau = self._locate(t)
-        i, k, tau = int(idx), int(k), float(tau)
-        if i < 0 or i >= self.n:
-            support = 1 - int(self.swing_side[k])
+        _, i, k, tau = self._locate_one(t)
+        r = self._rows
+        if i < 0 or i >= r.n:
+            support = 1 - r.swing_side[k]
             return StepPhase(i, False, False, support, -1, 0.0 if i < 0 else 1.0, True)
-        dsp = float(self.step_dsp[k])
-        ssp = float(self.step_duration[k]) - dsp
+        dsp = r.dsp[k]
+        ssp = r.duration[k] - dsp
         in_dsp = tau < dsp
-        s = 0.0 if in_dsp else float(np.clip((tau - dsp) / max(ssp, 1e-9), 0.0, 1.0))
-        swing = int(self.swing_side[k])
+        s = 0.0 if in_dsp else min(max((tau - dsp) / max(ssp, 1e-9), 0.0), 1.0)
+        swing = r.swing_side[k]
         return StepPhase(i, in_dsp, not in_dsp, 1 - swing, swing, s, False)
 
     def ssp_progress(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -142,34 +160,83 @@ class FootstepPlan:
         _, idx, k, tau = self._locate(times)
         dsp = self.step_dsp[k]
         ssp = np.maximum(self.step_duration[k] - dsp, 1e-9)
-        s = np.clip((tau - dsp) / ssp, 0.0, 1.0)
+        s = np.minimum(np.maximum((tau - dsp) / ssp, 0.0), 1.0)
         s = np.where(idx < 0, 0.0, np.where(idx >= self.n, 1.0, s))
         return idx, k, s
+
+    def ssp_progress_one(self, t: float) -> tuple[int, int, float]:
+        """:meth:`ssp_progress` for one instant ``t`` [s], in Python scalars."""
+        _, idx, k, tau = self._locate_one(t)
+        r = self._rows
+        if idx < 0:
+            return idx, k, 0.0
+        if idx >= r.n:
+            return idx, k, 1.0
+        dsp = r.dsp[k]
+        ssp = max(r.duration[k] - dsp, 1e-9)
+        return idx, k, min(max((tau - dsp) / ssp, 0.0), 1.0)
 
     # -- ZMP ------------------------------------------------------------------------------
     def zmp_reference(self, times: np.ndarray) -> np.ndarray:
         """ZMP reference (N, 2) [m] at ``times`` [s]: linear shift in DSP, foot centre in SSP."""
-        t, idx, k, tau = self._locate(times)
-        s = np.clip(tau / np.maximum(self.step_dsp[k], 1e-9), 0.0, 1.0)[..., None]
-        walking = self.zmp_from[k] + s * (self.support_pos[k, :2] - self.zmp_from[k])
-        mid0 = self.feet_init[:, :2].mean(axis=0)
-        mid1 = self.feet_final[:, :2].mean(axis=0)
-        last = self.support_pos[-1, :2]
-        s_end = np.clip((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0, 1.0)[..., None]
-        after = last + s_end * (mid1 - last)
-        out = np.where((idx < 0)[..., None], mid0, walking)
-        return np.where((idx >= self.n)[..., None], after, out)
+        if np.ndim(times) == 0:
+            return self.zmp_reference_one(float(times))
+        return self._zmp_reference(self._locate(times))
+
+    def _zmp_reference(self, loc: tuple[np.ndarray, ...]) -> np.ndarray:
+        t, idx, k, tau = loc
+        s = np.minimum(np.maximum(tau / np.maximum(self.step_dsp[k], 1e-9), 0.0), 1.0)[..., None]
+        zmp_from = self.zmp_from[k]
+        out = zmp_from + s * (self.support_pos[k, :2] - zmp_from)
+        if (idx < 0).any():
+            out = np.where((idx < 0)[..., None], self._rows.mid_init, out)
+        if (idx >= self.n).any():
+            last = self.support_pos[-1, :2]
+            s_end = np.clip((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0, 1.0)
+            after = last + s_end[..., None] * (self._rows.mid_final - last)
+            out = np.where((idx >= self.n)[..., None], after, out)
+        return out
+
+    def zmp_reference_one(self, t: float) -> np.ndarray:
+        """:meth:`zmp_reference` at one instant ``t`` [s]: (2,) [m] (same arithmetic)."""
+        t, idx, k, tau = self._locate_one(t)
+        r = self._rows
+        if idx < 0:
+            return r.mid_init.copy()
+        if idx >= r.n:
+            last = self.support_pos[-1, :2]
+            s_end = min(max((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0), 1.0)
+            return last + s_end * (r.mid_final - last)
+        s = min(max(tau / max(r.dsp[k], 1e-9), 0.0), 1.0)
+        (fx, fy), (sx, sy) = r.zmp_from[k], r.support_xy[k]
+        return np.array([fx + s * (sx - fx), fy + s * (sy - fy)])
+
+    def zmp_reference_and_bounds(
+        self, times: np.ndarray, margin: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """:meth:`zmp_reference` and :meth:`zmp_bounds` at the same ``times`` in one pass.
+
+        Returns:
+            (reference, lo, hi), each (N, 2) [m].
+        """
+        loc = self._locate(times)
+        return (self._zmp_reference(loc), *self._zmp_bounds(loc, margin))
 
     def _ground_feet(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Two foot centres (N, 2) each that bound the support area (equal in SSP)."""
-        _, idx, k, tau = self._locate(times)
+        return self._ground_feet_at(self._locate(times))
+
+    def _ground_feet_at(self, loc: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
+        _, idx, k, tau = loc
         in_ssp = tau >= self.step_dsp[k]
         a = self.support_pos[k, :2]
         b = np.where(in_ssp[..., None], a, self.swing_from[k, :2])
-        before, after = (idx < 0)[..., None], (idx >= self.n)[..., None]
-        init, final = self.feet_init[:, :2], self.feet_final[:, :2]
-        a = np.where(before, init[LEFT], np.where(after, final[LEFT], a))
-        b = np.where(before, init[RIGHT], np.where(after, final[RIGHT], b))
+        before, after = idx < 0, idx >= self.n
+        if before.any() or after.any():
+            before, after = before[..., None], after[..., None]
+            init, final = self.feet_init[:, :2], self.feet_final[:, :2]
+            a = np.where(before, init[LEFT], np.where(after, final[LEFT], a))
+            b = np.where(before, init[RIGHT], np.where(after, final[RIGHT], b))
         return a, b
 
     def zmp_bounds(self, times: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
@@ -179,7 +246,12 @@ class FootstepPlan:
             times: (N,) [s] query times.
             margin: [m] distance kept from the foot edges.
         """
-        a, b = self._ground_feet(times)
+        return self._zmp_bounds(self._locate(times), margin)
+
+    def _zmp_bounds(
+        self, loc: tuple[np.ndarray, ...], margin: float
+    ) -> tuple[np.ndarray, np.ndarray]:
+        a, b = self._ground_feet_at(loc)
         half = np.maximum(np.array(FOOT_SIZE) / 2.0 - margin, 0.0)
         return np.minimum(a, b) - half, np.maximum(a, b) + half
 
@@ -222,6 +294,40 @@ class FootstepPlan:
             feet[int(self.swing_side[j])] = self.swing_to[j]
         n_walk = max(walk.n_steps, started)
         return _finish(walk, self.t_start, self.feet_init, steps, feet, n_walk - started)
+
+
+class _PlanRows:
+    """A plan's per-step arrays as Python lists (scalar queries avoid numpy's call overhead)."""
+
+    def __init__(self, plan: FootstepPlan):
+        self.n = plan.n
+        self.start = plan.step_start.tolist()
+        self.duration = plan.step_duration.tolist()
+        self.dsp = plan.step_dsp.tolist()
+        self.height = plan.step_height.tolist()
+        self.swing_side = [int(v) for v in plan.swing_side]
+        self.swing_from = plan.swing_from.tolist()
+        self.swing_to = plan.swing_to.tolist()
+        self.support_pos = plan.support_pos.tolist()
+        self.support_xy = plan.support_pos[:, :2].tolist()
+        self.zmp_from = plan.zmp_from[:, :2].tolist()
+        self.feet_init = plan.feet_init.tolist()
+        self.feet_final = plan.feet_final.tolist()
+        self.mid_init = plan.feet_init[:, :2].mean(axis=0)  # (2,) [m]
+        self.mid_final = plan.feet_final[:, :2].mean(axis=0)
+        # One row per step with what a horizon query reads (one gather instead of many);
+        # the derived columns are the same arithmetic the queries did per sample.
+        dsp, sup = plan.step_dsp, plan.support_pos[:, :2]
+        frm, to, zf = plan.swing_from[:, :2], plan.swing_to[:, :2], plan.zmp_from[:, :2]
+        self.table = np.column_stack([
+            dsp,  # 0: DSP [s]
+            np.maximum(plan.step_duration - dsp, 1e-9),  # 1: SSP [s]
+            np.maximum(dsp, 1e-9),  # 2: DSP, > 0 [s]
+            sup, frm, to, zf,  # 3-4 support, 5-6 swing from, 7-8 swing to, 9-10 ZMP from
+            to - frm,  # 11-12
+            sup - zf,  # 13-14
+            plan.swing_side == LEFT,  # 15: 1.0 if the left foot swings
+        ])
 
 
 class _Steps:

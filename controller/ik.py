@@ -41,6 +41,8 @@ The three methods (SPEC section 3):
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 from controller.params import IkParams
@@ -49,6 +51,9 @@ from controller.qp import QP, QpSolver
 WAIST = 0  # index of the waist yaw in q_low (13,)
 N_LOW = 13
 METHODS = ("fixed", "redundancy", "mpc")
+# The bound rows' matrix, one shared object so the QP solver never re-factors it (see
+# controller.qp: matrices are tracked by identity). Never modify it.
+BOUND_ROWS = np.eye(N_LOW)
 
 
 def velocity_bounds(
@@ -62,8 +67,9 @@ def velocity_bounds(
     Returns:
         (lo, hi), each shaped like ``q`` [rad/s].
     """
-    lo = np.clip((np.asarray(q_min) - q) / dt, -speed_limit, speed_limit)
-    hi = np.clip((np.asarray(q_max) - q) / dt, -speed_limit, speed_limit)
+    # np.minimum(np.maximum(.)) = np.clip without its Python-level overhead
+    lo = np.minimum(np.maximum((np.asarray(q_min) - q) / dt, -speed_limit), speed_limit)
+    hi = np.minimum(np.maximum((np.asarray(q_max) - q) / dt, -speed_limit), speed_limit)
     return lo, np.maximum(hi, lo)
 
 
@@ -98,21 +104,22 @@ def build_ik(
     J = np.asarray(J_low, dtype=float)
     v = np.asarray(v_des, dtype=float)
     q = np.asarray(q_low, dtype=float)
-    P = J.T @ J + params.damping * np.eye(N_LOW)  # (13, 13)
-    c = -J.T @ v  # (13,)
+    P = J.T @ J  # (13, 13)
+    P.flat[:: N_LOW + 1] += params.damping  # + damping I
+    c = -(J.T @ v)  # (13,)
     lo, hi = velocity_bounds(q, q_min, q_max, dt, params.joint_speed_limit)
     if method == "fixed":
         lo[WAIST] = hi[WAIST] = 0.0
     elif method == "mpc":
         if waist_rate is None:
             raise ValueError("method 'mpc' needs waist_rate (the pelvic MPC's theta_dot)")
-        w = float(np.clip(waist_rate, lo[WAIST], hi[WAIST]))
+        w = min(max(float(waist_rate), float(lo[WAIST])), float(hi[WAIST]))  # clip
         lo[WAIST] = hi[WAIST] = w
     else:  # redundancy: w/2 (q_w + dt qd_w)^2 = w dt^2/2 qd_w^2 + w dt q_w qd_w + const
         w = params.redundancy_weight
         P[WAIST, WAIST] += w * dt * dt
         c[WAIST] += w * dt * q[WAIST]
-    return QP(P, c, np.eye(N_LOW), lo, hi)
+    return QP(P, c, BOUND_ROWS, lo, hi)
 
 
 def solve_ik(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:
@@ -125,13 +132,16 @@ def solve_ik(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:
 def log3(R: np.ndarray) -> np.ndarray:
     """Rotation vector (axis * angle, (3,)) of a rotation matrix R (3, 3); angle in [0, pi]."""
     R = np.asarray(R, dtype=float)
-    cos = np.clip(0.5 * (np.trace(R) - 1.0), -1.0, 1.0)
-    angle = float(np.arccos(cos))
-    w = np.array([R[2, 1] - R[1, 2], R[0, 2] - R[2, 0], R[1, 0] - R[0, 1]])  # 2 sin(a) axis
+    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()  # scalars: no numpy overhead
+    cos = min(max(0.5 * ((r00 + r11 + r22) - 1.0), -1.0), 1.0)
+    angle = math.acos(cos)
+    w = (r21 - r12, r02 - r20, r10 - r01)  # 2 sin(a) axis
     if angle < 1e-6:
-        return 0.5 * w  # first order: R ~ I + [phi]x
-    if np.pi - angle > 1e-4:
-        return angle / (2.0 * np.sin(angle)) * w
+        return np.array([0.5 * w[0], 0.5 * w[1], 0.5 * w[2]])  # first order: R ~ I + [phi]x
+    if math.pi - angle > 1e-4:
+        f = angle / (2.0 * math.sin(angle))
+        return np.array([f * w[0], f * w[1], f * w[2]])
+    w = np.array(w)
     # Near pi: axis from the diagonal of R = 2 a a' - I (+ small antisymmetric part).
     B = 0.5 * (R + np.eye(3))
     i = int(np.argmax(np.diag(B)))
@@ -144,9 +154,10 @@ def log3(R: np.ndarray) -> np.ndarray:
 
 def pose_error(T_cur: np.ndarray, T_des: np.ndarray) -> np.ndarray:
     """[p_des - p_cur; log3(R_des R_cur^T)] (6,), both poses (4, 4) in the same frame."""
-    e_p = T_des[:3, 3] - T_cur[:3, 3]
-    e_r = log3(T_des[:3, :3] @ T_cur[:3, :3].T)
-    return np.concatenate([e_p, e_r])
+    e = np.empty(6)
+    e[:3] = T_des[:3, 3] - T_cur[:3, 3]
+    e[3:] = log3(T_des[:3, :3] @ T_cur[:3, :3].T)
+    return e
 
 
 def foot_velocity_command(
@@ -167,6 +178,7 @@ def foot_velocity_command(
     Returns:
         (12,) [left twist (6); right twist (6)].
     """
-    left = np.asarray(v_ff_left, dtype=float) + gain * pose_error(T_cur_left, T_des_left)
-    right = np.asarray(v_ff_right, dtype=float) + gain * pose_error(T_cur_right, T_des_right)
-    return np.concatenate([left, right])
+    v = np.empty(12)
+    v[:6] = np.asarray(v_ff_left, dtype=float) + gain * pose_error(T_cur_left, T_des_left)
+    v[6:] = np.asarray(v_ff_right, dtype=float) + gain * pose_error(T_cur_right, T_des_right)
+    return v

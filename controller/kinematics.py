@@ -43,6 +43,9 @@ from models.dyros_jet import (
 )
 
 _ANKLE_JOINTS = ("L_ankle_roll", "R_ankle_roll")  # joint origin = ankle point
+_EPS = float(np.finfo(float).eps)
+_ORIGIN = (0.0, 0.0, 0.0)
+_IDENTITY_WXYZ = (1.0, 0.0, 0.0, 0.0)
 
 
 @dataclass(frozen=True)
@@ -83,11 +86,17 @@ class RobotKinematics:
         self.hip_frame_ids = tuple(m.getFrameId(b, pin.BODY) for b in HIP_BODIES)
         self.ankle_joint_ids = tuple(m.getJointId(j) for j in _ANKLE_JOINTS)
         self.total_mass = float(pin.computeTotalMass(m))
+        self._q_identity_base = np.zeros(m.nq)  # base at the origin, quaternion xyzw identity
+        self._q_identity_base[6] = 1.0
 
     # ------------------------------------------------------------------ configurations
-    def configuration(self, q_joints, p_world_base=(0.0, 0.0, 0.0),
-                      quat_wxyz=(1.0, 0.0, 0.0, 0.0)) -> np.ndarray:
+    def configuration(self, q_joints, p_world_base=_ORIGIN,
+                      quat_wxyz=_IDENTITY_WXYZ) -> np.ndarray:
         """Pinocchio q from joint angles (19,), base position and MuJoCo-order quaternion."""
+        if p_world_base is _ORIGIN and quat_wxyz is _IDENTITY_WXYZ:  # base at the identity
+            q = self._q_identity_base.copy()
+            q[7:] = q_joints
+            return q
         w, x, y, z = np.asarray(quat_wxyz, dtype=float)
         q = np.empty(self.model.nq)
         q[:3] = p_world_base
@@ -112,23 +121,37 @@ class RobotKinematics:
         q = self.configuration(q_joints)
         Ag = pin.computeCentroidalMap(m, d, q)  # forward kinematics + CoM + A_G (about the CoM)
         pin.computeJointJacobians(m, d)  # uses the kinematics just computed
-        pin.updateFramePlacements(m, d)
         lws = pin.LOCAL_WORLD_ALIGNED
         fl, fr = self.sole_frame_ids
         J_low = np.vstack((
             pin.getFrameJacobian(m, d, fl, lws)[:, self.lower_v_idx],
             pin.getFrameJacobian(m, d, fr, lws)[:, self.lower_v_idx],
         ))
+        # Only the frames used here (not all frames of the model).
+        upd = pin.updateFramePlacement
         return KinState(
-            T_pelvis_left_sole=d.oMf[fl].homogeneous.copy(),
-            T_pelvis_right_sole=d.oMf[fr].homogeneous.copy(),
+            T_pelvis_left_sole=upd(m, d, fl).homogeneous,
+            T_pelvis_right_sole=upd(m, d, fr).homogeneous,
             p_pelvis_com=d.com[0].copy(),
             J_low=J_low,
-            cmm_yaw_low=Ag[5, self.lower_v_idx].copy(),
-            cmm_yaw_up=Ag[5, self.arm_qp_v_idx].copy(),
-            p_pelvis_hips=np.array([d.oMf[i].translation for i in self.hip_frame_ids]),
+            cmm_yaw_low=Ag[5, self.lower_v_idx],
+            cmm_yaw_up=Ag[5, self.arm_qp_v_idx],
+            p_pelvis_hips=np.array([upd(m, d, i).translation for i in self.hip_frame_ids]),
             p_pelvis_ankles=np.array([d.oMi[j].translation for j in self.ankle_joint_ids]),
         )
+
+    def com_and_soles(self, q_joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """CoM (3,) and the left/right sole positions (2, 3) in the pelvis frame, one pass.
+
+        The base is at the identity, as in :meth:`compute`; one forward-kinematics pass serves
+        the CoM and both soles (what :meth:`support_anchored_base` + :meth:`com_world` do in
+        two passes per foot).
+        """
+        m, d = self.model, self.data
+        com = pin.centerOfMass(m, d, self.configuration(q_joints), False).copy()
+        upd = pin.updateFramePlacement
+        soles = np.array([upd(m, d, f).translation for f in self.sole_frame_ids])
+        return com, soles
 
     def com_world(self, q_joints, p_world_base, quat_wxyz) -> np.ndarray:
         """Whole-body CoM (3,) in the world for a given base pose (quaternion wxyz)."""
@@ -154,7 +177,7 @@ class RobotKinematics:
 def condition_number(J: np.ndarray) -> float:
     """kappa(J) = sigma_max / sigma_min by SVD (eq. 45); inf if J is (numerically) singular."""
     s = np.linalg.svd(np.asarray(J, dtype=float), compute_uv=False)
-    if s.size == 0 or s[0] == 0.0 or s[-1] <= s[0] * np.finfo(float).eps:
+    if s.size == 0 or s[0] == 0.0 or s[-1] <= s[0] * _EPS:
         return float("inf")
     return float(s[0] / s[-1])
 

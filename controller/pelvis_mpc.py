@@ -124,6 +124,9 @@ class PelvisMpc:
         self._acc_scale = 0.5 * T * T  # s: makes the acceleration rows O(1)
         self._Acon = np.vstack([np.eye(n), self._acc_scale * self._M])  # (2N, N)
         self._angle_limit = math.radians(params.angle_limit_deg)
+        # Constant parts of the per-tick vectors (same arithmetic as written out in build).
+        self._bMtM = b * self._MtM  # (N, N)
+        self._sM = self._acc_scale * self._M  # (N, N)
         if shape_changed:
             self.solver.reset()
 
@@ -134,30 +137,36 @@ class PelvisMpc:
         the inputs are ``self.inputs_from_angles(x, theta, theta_dot)``.
         """
         ref = np.asarray(theta_ref, dtype=float).reshape(-1)
+        x0 = np.array([theta, theta_dot], dtype=float)
+        return self._build(ref, self._PA_ang @ x0)
+
+    def _build(self, ref: np.ndarray, free: np.ndarray) -> QP:
+        """The QP for the reference (N,) and the free response f = P_A,angle x0 (N,)."""
         n = self.n_samples
         if ref.shape[0] != n:
             raise ValueError(f"theta_ref has {ref.shape[0]} samples, the MPC has {n}")
-        x0 = np.array([theta, theta_dot], dtype=float)
-        free = self._PA_ang @ x0  # (N,) f: angles with zero input
-        a, b = self.params.alpha, self.params.beta
-        q = -a * ref - b * self._MtM @ free
+        q = -self.params.alpha * ref - self._bMtM @ free  # - alpha ref - beta M'M f
         lim, acc, s = self._angle_limit, self.params.acc_limit, self._acc_scale
-        mf = s * self._M @ free
-        lo = np.concatenate([np.full(n, -lim), -acc * s + mf])
-        hi = np.concatenate([np.full(n, lim), acc * s + mf])
+        mf = self._sM @ free  # s M f
+        lo = np.empty(2 * n)
+        hi = np.empty(2 * n)
+        lo[:n] = -lim
+        hi[:n] = lim
+        np.add(-acc * s, mf, out=lo[n:])
+        np.add(acc * s, mf, out=hi[n:])
         return QP(self._P, q, self._Acon, lo, hi)
 
     def solve(self, theta: float, theta_dot: float, theta_ref: np.ndarray) -> PelvisPlan:
         """Solve eq. (37) and integrate the first input over one control period (eq. 38)."""
-        qp = self.build(theta, theta_dot, theta_ref)
         ref = np.asarray(theta_ref, dtype=float).reshape(-1)
-        res = self.solver.solve(qp)
         x0 = np.array([theta, theta_dot], dtype=float)
+        free = self._PA_ang @ x0  # (N,) angles with zero input
+        res = self.solver.solve(self._build(ref, free))
         if res.ok:
-            u = self._M @ (res.x - self._PA_ang @ x0)  # (N,) inputs from the angles
+            u = self._M @ (res.x - free)  # (N,) inputs from the angles
         else:
             u = self._brake(theta_dot)
-        angles = self._PA_ang @ x0 + self._PB_ang @ u
+        angles = free + self._PB_ang @ u
         rates = self._PA_rate @ x0 + self._PB_rate @ u
         dt = self.control_dt
         if res.ok:
@@ -166,7 +175,7 @@ class PelvisMpc:
             u0 = float(np.clip(-theta_dot / dt, -self.params.acc_limit, self.params.acc_limit))
         next_rate = theta_dot + dt * u0
         next_angle = theta + dt * theta_dot + 0.5 * dt * dt * u0
-        return PelvisPlan(angles, rates, u.copy(), ref.copy(), next_angle, next_rate, res.ok)
+        return PelvisPlan(angles, rates, u, ref.copy(), next_angle, next_rate, res.ok)
 
     def inputs_from_angles(self, angles: np.ndarray, theta: float, theta_dot: float) -> np.ndarray:
         """U (N,) [rad/s^2] that produces the predicted angles (N,) from [theta, theta_dot]."""

@@ -10,7 +10,14 @@ Two back-ends:
   because the default 1e-3 leaves errors of tens of percent on our small QPs. Polishing is
   off by default: OSQP 1.1 prints "Polishing not needed" on stdout at every solve without an
   active constraint, even with verbose=False, which floods a 200 Hz loop's console.
-- ``"daqp"``: DAQP, an exact dual active-set solver for small dense QPs.
+- ``"daqp"``: DAQP, an exact dual active-set solver for small dense QPs. One ``daqp.Model``
+  per solver: set up once (Cholesky factor of P, constraint matrix), then each tick only the
+  vectors are updated and the last active set is the warm start; P or A are refactored only
+  when the layer hands over a different matrix.
+
+Matrices are tracked by *identity*: a layer that keeps P or A constant passes the same array
+object every tick (built once per parameter change) and the solver never re-factors it; a
+layer that changes them builds a new array. Never modify a QP's matrices in place.
 
 A failed solve never raises: :meth:`QpSolver.solve` returns ``ok=False`` and the caller falls
 back (holds its last command) and counts the failure.
@@ -18,8 +25,10 @@ back (holds its last command) and counts the failure.
 
 from __future__ import annotations
 
+import math
 from typing import NamedTuple
 
+import daqp
 import numpy as np
 import osqp
 import scipy.sparse as sp
@@ -63,11 +72,13 @@ class QpSolver:
 
     def reset(self) -> None:
         self._solver: osqp.OSQP | None = None
+        self._daqp = None  # daqp.Model
         self._shape: tuple[int, int] | None = None
         self._P_pattern: _Pattern | None = None
         self._A_pattern: _Pattern | None = None
-        self._P_key: int | None = None
-        self._A_key: int | None = None
+        self._P_obj: np.ndarray | None = None  # the P / A last handed to the solver
+        self._A_obj: np.ndarray | None = None
+        self._eq_key: bytes | None = None  # which rows were equalities (DAQP sense)
         self.x_prev: np.ndarray | None = None
         self.failures = 0
 
@@ -87,8 +98,7 @@ class QpSolver:
         )
         self._solver = s
         self._shape = qp.A.shape
-        self._P_key = _key(qp.P)
-        self._A_key = _key(qp.A)
+        self._P_obj, self._A_obj = qp.P, qp.A
 
     def _solve_osqp(self, qp: QP) -> tuple[np.ndarray | None, str]:
         if self._solver is None or self._shape != qp.A.shape:
@@ -96,43 +106,67 @@ class QpSolver:
             assert self._solver is not None
         else:
             kw: dict[str, np.ndarray] = {}
-            pk, ak = _key(qp.P), _key(qp.A)
-            if pk != self._P_key:
+            if qp.P is not self._P_obj:
                 kw["Px"] = self._P_pattern.values(qp.P)
-                self._P_key = pk
-            if ak != self._A_key:
+                self._P_obj = qp.P
+            if qp.A is not self._A_obj:
                 kw["Ax"] = self._A_pattern.values(qp.A)
-                self._A_key = ak
+                self._A_obj = qp.A
             self._solver.update(
                 q=qp.q, l=np.maximum(qp.l, -INF), u=np.minimum(qp.u, INF), **kw
             )
         res = self._solver.solve(raise_error=False)
         status = str(res.info.status)
-        if res.info.status_val not in (1, 2) or res.x is None or not np.all(np.isfinite(res.x)):
+        if res.info.status_val not in (1, 2) or res.x is None or not math.isfinite(res.x.sum()):
             return None, status
-        return np.asarray(res.x, dtype=float).copy(), status
+        return np.array(res.x, dtype=float), status
 
     # -- DAQP ------------------------------------------------------------------------------
     def _solve_daqp(self, qp: QP) -> tuple[np.ndarray | None, str]:
-        import daqp
-
-        H = np.ascontiguousarray(qp.P, dtype=float)
-        f = np.ascontiguousarray(qp.q, dtype=float)
-        A = np.ascontiguousarray(qp.A, dtype=float)
-        bu = np.ascontiguousarray(np.minimum(qp.u, INF), dtype=float)
-        bl = np.ascontiguousarray(np.maximum(qp.l, -INF), dtype=float)
-        sense = np.where(np.abs(bu - bl) < 1e-12, 5, 0).astype(np.int32)
-        x, _fval, exitflag, _info = daqp.solve(H, f, A, bu, bl, sense)
-        if exitflag < 1 or not np.all(np.isfinite(x)):
+        P, q, A = qp.P, qp.q, qp.A
+        bu = np.minimum(qp.u, INF)
+        bl = np.maximum(qp.l, -INF)
+        eq = np.abs(bu - bl) < 1e-12  # equality rows (sense 5)
+        eq_key = eq.tobytes()
+        model = self._daqp
+        if model is None or self._shape != A.shape:
+            model = daqp.Model()
+            flag, _ = model.setup(
+                np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(q, dtype=float),
+                np.ascontiguousarray(A, dtype=float), bu, bl, eq.astype(np.intc) * 5,
+            )
+            if flag < 0:
+                return None, f"daqp setup flag {flag}"
+            self._daqp, self._shape = model, A.shape
+            self._P_obj, self._A_obj, self._eq_key = P, A, eq_key
+        else:
+            kw: dict[str, np.ndarray] = {}
+            if P is not self._P_obj:
+                kw["H"] = P
+                self._P_obj = P
+            if A is not self._A_obj:
+                kw["A"] = A
+                self._A_obj = A
+            if eq_key != self._eq_key:  # else keep the working set: the warm start
+                kw["sense"] = eq.astype(np.intc) * 5
+                self._eq_key = eq_key
+            flag = model.update(f=q, bupper=bu, blower=bl, **kw)
+            if flag < 0:
+                return None, f"daqp update flag {flag}"
+        x, _fval, exitflag, _info = model.solve()
+        if exitflag < 1 or not math.isfinite(x.sum()):
             return None, f"daqp exitflag {exitflag}"
-        return np.asarray(x, dtype=float).copy(), "solved"
+        return x, "solved"
 
     def solve(self, qp: QP) -> QpResult:
         """Solve; on failure return the previous solution (or zeros) with ok=False."""
         try:
-            if np.any(qp.l > qp.u + 1e-9) or not (
-                np.isfinite(qp.P).all() and np.isfinite(qp.q).all() and np.isfinite(qp.A).all()
-            ):
+            # Finite data: a sum is finite iff every term is (barring overflow near 1e308).
+            # P and A already checked (the same objects as last time) are not summed again.
+            finite = math.isfinite(qp.q.sum()) and (
+                qp.P is self._P_obj or math.isfinite(qp.P.sum())
+            ) and (qp.A is self._A_obj or math.isfinite(qp.A.sum()))
+            if not finite or (qp.l > qp.u + 1e-9).any():
                 x, status = None, "infeasible bounds or non-finite data"
             elif self.backend == "osqp":
                 x, status = self._solve_osqp(qp)
@@ -143,8 +177,9 @@ class QpSolver:
         if x is None:
             self.failures += 1
             fallback = self.x_prev if self.x_prev is not None else np.zeros(qp.q.shape[0])
-            if self.backend == "osqp":
-                self._solver = None  # re-setup next time: the workspace may be poisoned
+            # re-setup next time: the workspace may be poisoned
+            self._solver = self._daqp = None
+            self._P_obj = self._A_obj = None
             return QpResult(fallback, False, status)
         self.x_prev = x
         return QpResult(x, True, status)
@@ -164,11 +199,6 @@ class _Pattern:
 
     def matrix(self, dense: np.ndarray) -> sp.csc_matrix:
         return sp.csc_matrix((self.values(dense), self.indices, self.indptr), shape=self.shape)
-
-
-def _key(M: np.ndarray) -> int:
-    """Cheap change detector for a matrix's values (identity of content)."""
-    return hash(M.tobytes())
 
 
 def solve_exact(qp: QP, active_tol: float = 1e-9) -> np.ndarray:

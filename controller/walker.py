@@ -48,7 +48,7 @@ from controller.params import ControllerParams, horizon_samples
 from controller.pelvis_mpc import PelvisMpc, PelvisPlan
 from controller.pelvis_reference import reference_pelvic_angles
 from controller.qp import QpSolver
-from controller.swing import foot_trajectories
+from controller.swing import FootTrajectory, foot_trajectories, horizon_queries
 
 LAYERS = ("kinematics", "com_mpc", "pelvis_mpc", "ik", "arm_swing")
 
@@ -113,6 +113,9 @@ class Walker:
         self.q_init = self.q_cmd.copy()
         self.lower = np.arange(13)  # q_cmd starts with the 13 lower joints (LOWER_JOINTS order)
         self.arms = kin.arm_qp_joint_idx  # positions of the 4 arm-QP joints in q_cmd
+        # constant per tick: the joint limits of the two groups
+        self._q_min_low, self._q_max_low = kin.q_min[self.lower], kin.q_max[self.lower]
+        self._q_min_arms, self._q_max_arms = kin.q_min[self.arms], kin.q_max[self.arms]
         self.p_world_pelvis_des = np.array(p_world_pelvis_init, dtype=float)
         self.pelvis_height = float(self.p_world_pelvis_des[2])
 
@@ -132,6 +135,8 @@ class Walker:
         self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
         self._pending: ControllerParams | None = None
         self._com_des_prev: np.ndarray | None = None
+        # (plan, t, feet): the planned feet at the next tick's time, reused by that tick
+        self._feet_next: tuple[FootstepPlan, float, FootTrajectory] | None = None
 
     # -- parameters --------------------------------------------------------------------------
     def set_params(self, params: ControllerParams) -> None:
@@ -181,8 +186,14 @@ class Walker:
         t0 = clock() if clock else 0.0
         phase = self.plan.phase(t)
 
-        # 2-3. CoM MPC (eq. 10-18); predicted CoM over the horizon (eq. 25-26).
-        com_plan = self.com_mpc.solve(self.com_state, t, self.plan)
+        # 2-3. CoM MPC (eq. 10-18); predicted CoM over the horizon (eq. 25-26). The plan is
+        # queried once over the horizon: ZMP reference and bounds here, feet for step 6.
+        com_mpc = self.com_mpc
+        times = com_mpc.sample_times(t)
+        horizon = horizon_queries(self.plan, times, p.com.zmp_margin)
+        com_plan = com_mpc.solve_references(
+            self.com_state, t, times, horizon.zmp_ref, horizon.zmp_lo, horizon.zmp_hi
+        )
         if not com_plan.ok:
             failures["com_mpc"] = True
         self.com_state = com_plan.next_state
@@ -204,13 +215,13 @@ class Walker:
         self.p_world_pelvis_des[2] = self.pelvis_height
         v_world_pelvis = (self.p_world_pelvis_des - p_prev) / dt
 
-        # 5. Foot trajectories (eq. 20-21) at the next tick and over the horizon.
-        feet_now = foot_trajectories(self.plan, np.array([t + dt]))
-        feet_h = foot_trajectories(self.plan, com_plan.times)
+        # 5. Foot trajectories (eq. 20-21) at the next tick (over the horizon: see 2-3).
+        feet_now = foot_trajectories(self.plan, t + dt)  # (3,) per foot
+        self._feet_next = (self.plan, t + dt, feet_now)
 
         # 6. Reference pelvic angle over the horizon (eq. 27-33).
         theta_ref = reference_pelvic_angles(
-            com_plan.com, feet_h.p_left[:, :2], feet_h.p_right[:, :2],
+            com_plan.com, horizon.p_left_xy, horizon.p_right_xy,
             p.pelvis.k_pel, p.walk.step_width / 2,
         )
 
@@ -229,24 +240,26 @@ class Walker:
         # 8. QP inverse kinematics (eq. 39-40) on the commanded state.
         ks: KinState = self.kin.compute(self.q_cmd)
         t0 = lap("kinematics", t0)
-        p_des_l = feet_now.p_left[0] - self.p_world_pelvis_des
-        p_des_r = feet_now.p_right[0] - self.p_world_pelvis_des
-        v_ff_l = np.concatenate([feet_now.v_left[0] - v_world_pelvis, np.zeros(3)])
-        v_ff_r = np.concatenate([feet_now.v_right[0] - v_world_pelvis, np.zeros(3)])
+        p_des_l = feet_now.p_left - self.p_world_pelvis_des
+        p_des_r = feet_now.p_right - self.p_world_pelvis_des
+        v_ff_l = np.zeros(6)  # [linear; angular]: the feet do not turn
+        v_ff_l[:3] = feet_now.v_left - v_world_pelvis
+        v_ff_r = np.zeros(6)
+        v_ff_r[:3] = feet_now.v_right - v_world_pelvis
         v_des = foot_velocity_command(
             ks.T_pelvis_left_sole, _pose(p_des_l), v_ff_l,
             ks.T_pelvis_right_sole, _pose(p_des_r), v_ff_r, p.ik.foot_gain,
         )
         q_low = self.q_cmd[lower]
         qp = build_ik(
-            ks.J_low, v_des, q_low, self.kin.q_min[lower], self.kin.q_max[lower],
+            ks.J_low, v_des, q_low, self._q_min_low, self._q_max_low,
             p.ik, dt, p.method, waist_rate if p.method == "mpc" else None,
         )
         q_dot_low, ok = solve_ik(qp, self.ik_solver)
         if not ok:
             failures["ik"] = True
             q_dot_low = np.zeros(13)  # fall back: hold the last command
-        speed_limited = bool(np.any(np.abs(q_dot_low) >= p.ik.joint_speed_limit * 0.999))
+        speed_limited = bool(np.abs(q_dot_low).max() >= p.ik.joint_speed_limit * 0.999)
         t0 = lap("ik", t0)
 
         # 9. Arm swing (eq. 41-43) with the lower-body velocities just computed.
@@ -254,7 +267,7 @@ class Walker:
         if p.arms.enabled:
             aqp = build_arm_qp(
                 ks.cmm_yaw_low, q_dot_low, ks.cmm_yaw_up, self.q_cmd[arms], self.q_init[arms],
-                self.kin.q_min[arms], self.kin.q_max[arms], p.ik.joint_speed_limit, p.arms, dt,
+                self._q_min_arms, self._q_max_arms, p.ik.joint_speed_limit, p.arms, dt,
             )
             q_dot_up, ok = solve_arm(aqp, self.arm_solver)
             if not ok:
@@ -266,7 +279,7 @@ class Walker:
         t0 = lap("arm_swing", t0)
 
         # 10. Joint targets (eq. 40).
-        q_dot = np.zeros_like(self.q_cmd)
+        q_dot = np.zeros(self.q_cmd.shape[0])
         q_dot[lower] = q_dot_low
         q_dot[arms] = q_dot_up
         self.q_cmd = self.q_cmd + dt * q_dot
@@ -286,8 +299,8 @@ class Walker:
             p_world_pelvis_des=self.p_world_pelvis_des.copy(),
             p_world_com_des=p_world_com_des,
             p_world_com_meas=p_world_com_meas,
-            p_world_feet_des=np.stack([feet_now.p_left[0], feet_now.p_right[0]]),
-            zmp_ref=self.plan.zmp_reference(np.array([t]))[0],
+            p_world_feet_des=np.array([feet_now.p_left, feet_now.p_right]),
+            zmp_ref=self.plan.zmp_reference_one(t),
             waist_angle=float(self.q_cmd[lower[0]]),
             waist_rate=float(q_dot_low[0]),
             h_low=float(ks.cmm_yaw_low @ q_dot_low),
@@ -314,17 +327,22 @@ class Walker:
     ) -> np.ndarray:
         """CoM from the measured joints, the base placed so the support sole is on its foothold.
 
-        In double support (``sole`` None) the two anchored estimates are averaged.
+        In double support (``sole`` None) the two anchored estimates are averaged. One
+        kinematics pass gives the CoM and both soles relative to the base; the base placed by
+        the support sole is then ``sole - p_pelvis_sole`` (same as
+        :meth:`RobotKinematics.support_anchored_base` + :meth:`RobotKinematics.com_world`).
         """
+        p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)
         if sole is not None:
-            base = self.kin.support_anchored_base(q_meas, side, sole)
-            return self.kin.com_world(q_meas, base, (1.0, 0.0, 0.0, 0.0))
-        feet = foot_trajectories(self.plan, np.array([t]))
-        coms = []
-        for s, pos in ((LEFT, feet.p_left[0]), (RIGHT, feet.p_right[0])):
-            base = self.kin.support_anchored_base(q_meas, s, pos)
-            coms.append(self.kin.com_world(q_meas, base, (1.0, 0.0, 0.0, 0.0)))
-        return 0.5 * (coms[0] + coms[1])
+            return (sole - p_pelvis_soles[side]) + p_pelvis_com
+        cached = self._feet_next  # computed last tick for this very time (same plan)
+        if cached is not None and cached[0] is self.plan and cached[1] == t:
+            feet = cached[2]
+        else:
+            feet = foot_trajectories(self.plan, t)
+        com_l = (feet.p_left - p_pelvis_soles[LEFT]) + p_pelvis_com
+        com_r = (feet.p_right - p_pelvis_soles[RIGHT]) + p_pelvis_com
+        return 0.5 * (com_l + com_r)
 
     def snapshot_params(self) -> ControllerParams:
         """The parameters in force (pending ones included)."""

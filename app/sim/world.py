@@ -3,11 +3,13 @@
 One owner of the simulation loop (mujoco_playground's pattern): ``sim_dt`` (MuJoCo's timestep)
 and ``control_dt`` (200 Hz) are separate and ``n_substeps = control_dt / sim_dt``. A control
 period = write the servo targets, then ``mj_step`` n_substeps times; energy (eq. 44) and servo
-saturation are accumulated over the substeps.
+saturation are accumulated over the substeps (the per-substep servo torques and joint rates
+are copied into preallocated buffers, the arithmetic is done once per control period).
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -60,6 +62,17 @@ class World:
         self.force_limit = np.abs(m.actuator_forcerange[self.act_idx, 1])
         self.key_id = m.key(KEYFRAME).id
         self._force6 = np.zeros(6)
+        self._sat_limit = 0.99 * self.force_limit  # [N m] saturation threshold
+        self._pyramidal = int(m.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
+        self._geom_body = m.geom_bodyid.tolist()  # geom -> body
+        self._foot_side = {int(g): side for side, g in enumerate(self.foot_geom_ids)}
+        # Contiguous index ranges as slices (cheaper than fancy indexing every substep).
+        self._act_sel = _as_slice(self.act_idx)
+        self._qvel_sel = _as_slice(self.qvel_idx)
+        n = len(JOINTS)
+        self._tau_buf = np.empty((self.n_substeps, n))  # [N m] per substep
+        self._qd_buf = np.empty((self.n_substeps, n))  # [rad/s] per substep
+        self._energy_buf = np.empty((self.n_substeps + 1, n))  # running sum, see step()
         self.reset()
 
     # -- state -------------------------------------------------------------------------------
@@ -114,70 +127,98 @@ class World:
 
     def torso_tilt(self) -> float:
         """Angle between the base z axis and the world z axis [rad]."""
-        zz = self.data.xmat[self.root_id].reshape(3, 3)[2, 2]
-        return float(np.arccos(np.clip(zz, -1.0, 1.0)))
+        zz = float(self.data.xmat[self.root_id, 8])  # row-major 3x3: element (2, 2)
+        return math.acos(min(max(zz, -1.0), 1.0))
 
     # -- stepping ----------------------------------------------------------------------------
     def step(self, q_target: np.ndarray) -> None:
         """Hold ``q_target`` on the servos for one control period (n_substeps MuJoCo steps)."""
-        d = self.data
+        m, d = self.model, self.data
         d.ctrl[self.act_idx] = q_target
-        dt = self.sim_dt
-        for _ in range(self.n_substeps):
-            mujoco.mj_step(self.model, d)
-            tau = d.actuator_force[self.act_idx]
-            power = tau * d.qvel[self.qvel_idx]
-            self.energy_per_joint += np.maximum(power * dt, 0.0)
-            if np.any(np.abs(tau) >= 0.99 * self.force_limit):
-                self.saturated_substeps += 1
+        tau, qd = self._tau_buf, self._qd_buf
+        act, qv = self._act_sel, self._qvel_sel
+        for i in range(self.n_substeps):
+            mujoco.mj_step(m, d)
+            tau[i] = d.actuator_force[act]
+            qd[i] = d.qvel[qv]
+        # Positive work per substep, added substep by substep as before: row 0 holds the
+        # total so far and the cumulative sum adds the rows in order (same rounding).
+        e = self._energy_buf
+        e[0] = self.energy_per_joint
+        np.maximum(tau * qd * self.sim_dt, 0.0, out=e[1:])
+        self.energy_per_joint[:] = np.add.accumulate(e, axis=0)[-1]
+        self.saturated_substeps += int(
+            np.count_nonzero((np.abs(tau) >= self._sat_limit).any(axis=1))
+        )
 
     # -- contacts ----------------------------------------------------------------------------
     def contacts(self) -> Contacts:
         """Foot contact forces, their centre of pressure, and non-foot floor contacts."""
         m, d = self.model, self.data
-        in_contact = np.zeros(2, dtype=bool)
-        fz = np.zeros(2)
-        moment = np.zeros(2)
-        total = 0.0
+        in_contact = [False, False]
+        fz = [0.0, 0.0]  # [N]
+        mx = my = total = 0.0  # moment of the vertical forces about the origin, their sum
         other = False
-        for i in range(d.ncon):
-            c = d.contact[i]
-            g1, g2 = c.geom1, c.geom2
-            b1, b2 = m.geom_bodyid[g1], m.geom_bodyid[g2]
-            if b1 != self.floor_body and b2 != self.floor_body:
-                continue
-            robot_geom = g2 if b1 == self.floor_body else g1
-            hit = np.nonzero(self.foot_geom_ids == robot_geom)[0]
-            if len(hit) == 0:
-                other = True
-                continue
-            mujoco.mj_contactForce(m, d, i, self._force6)
-            frame = c.frame.reshape(3, 3)
-            f_world = frame.T @ self._force6[:3]
-            f_up = abs(f_world[2])
-            side = int(hit[0])
-            in_contact[side] = True
-            fz[side] += f_up
-            moment += f_up * c.pos[:2]
-            total += f_up
-        cop = moment / total if total > 1e-6 else None
-        return Contacts(in_contact, fz, cop, other)
+        ncon = d.ncon
+        if ncon:
+            # The contact arrays as Python lists once: a few contacts, scalar arithmetic.
+            con = d.contact
+            g1, g2 = con.geom1.tolist(), con.geom2.tolist()
+            frames, pos = con.frame.tolist(), con.pos.tolist()
+            dims, adrs, mus = con.dim.tolist(), con.efc_address.tolist(), con.friction.tolist()
+            body, floor, foot_side = self._geom_body, self.floor_body, self._foot_side
+            efc = d.efc_force
+            for i in range(ncon):
+                if body[g1[i]] == floor:
+                    robot = g2[i]
+                elif body[g2[i]] == floor:
+                    robot = g1[i]
+                else:
+                    continue
+                side = foot_side.get(robot)
+                if side is None:
+                    other = True
+                    continue
+                adr = adrs[i]
+                if self._pyramidal and dims[i] == 3 and adr >= 0:
+                    # mj_contactForce for a pyramidal cone: normal = sum of the 4 edge forces,
+                    # tangent j = (edge 2j - edge 2j+1) * friction j
+                    p0, p1, p2, p3 = efc[adr : adr + 4].tolist()
+                    fn = ((p0 + p1) + p2) + p3
+                    f1 = (p0 - p1) * mus[i][0]
+                    f2 = (p2 - p3) * mus[i][1]
+                else:
+                    mujoco.mj_contactForce(m, d, i, self._force6)
+                    fn, f1, f2 = self._force6[:3].tolist()
+                fr = frames[i]  # rows: normal, tangent 1, tangent 2
+                f_up = abs(fr[2] * fn + fr[5] * f1 + fr[8] * f2)  # (frame.T @ f)[2] [N]
+                in_contact[side] = True
+                fz[side] += f_up
+                mx += f_up * pos[i][0]
+                my += f_up * pos[i][1]
+                total += f_up
+        cop = np.array([mx / total, my / total]) if total > 1e-6 else None
+        return Contacts(np.array(in_contact), np.array(fz), cop, other)
 
     def support_polygon(self, in_contact: np.ndarray) -> np.ndarray:
         """(M, 2) convex hull (counter-clockwise) of the soles in contact."""
         pts = []
-        soles = self.sole_positions()
-        yaws = self.sole_yaws()
+        d = self.data
         hx, hy = FOOT_SIZE[0] / 2, FOOT_SIZE[1] / 2
-        corners = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
+        corners = ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
         for side in range(2):
             if in_contact[side]:
-                c, s = np.cos(yaws[side]), np.sin(yaws[side])
-                R = np.array([[c, -s], [s, c]])
-                pts.append(corners @ R.T + soles[side, :2])
+                site = int(self.sole_site_ids[side])
+                px, py = d.site_xpos[site, :2].tolist()
+                mat = d.site_xmat[site]
+                yaw = math.atan2(mat[3], mat[0])  # (1, 0) and (0, 0) of the 3x3
+                c, s = math.cos(yaw), math.sin(yaw)
+                pts += [(x * c - y * s + px, x * s + y * c + py) for x, y in corners]
         if not pts:
             return np.zeros((0, 2))
-        return convex_hull(np.vstack(pts))
+        if len(pts) == 4:  # one foot: its rectangle is already convex and counter-clockwise
+            return np.array(pts)
+        return convex_hull(np.array(pts))
 
     def fall_reason(self) -> str | None:
         """Why the robot counts as fallen (SPEC 4), or None."""
@@ -190,7 +231,7 @@ class World:
 
 def convex_hull(points: np.ndarray) -> np.ndarray:
     """Andrew's monotone chain; returns the hull counter-clockwise, (M, 2)."""
-    pts = sorted(map(tuple, np.round(points, 12)))
+    pts = sorted(map(tuple, np.round(points, 12).tolist()))
     if len(pts) <= 2:
         return np.array(pts)
 
@@ -214,10 +255,18 @@ def point_in_polygon(p: np.ndarray, hull: np.ndarray, tol: float = 1e-3) -> bool
     """True if p lies inside the counter-clockwise convex polygon (within tol metres)."""
     if len(hull) < 3:
         return False
-    a = hull
-    b = np.roll(hull, -1, axis=0)
-    edge = b - a
-    rel = p - a
-    cross = edge[:, 0] * rel[:, 1] - edge[:, 1] * rel[:, 0]
-    length = np.linalg.norm(edge, axis=1)
-    return bool(np.all(cross / length >= -tol))
+    px, py = float(p[0]), float(p[1])
+    pts = np.asarray(hull, dtype=float).tolist()
+    for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1], strict=True):
+        ex, ey = bx - ax, by - ay
+        length = math.sqrt(ex * ex + ey * ey)
+        if length == 0.0 or not (ex * (py - ay) - ey * (px - ax)) / length >= -tol:
+            return False  # (a degenerate edge gave NaN before: not inside)
+    return True
+
+
+def _as_slice(idx: np.ndarray) -> slice | np.ndarray:
+    """``slice(a, b)`` if ``idx`` is the contiguous range a..b-1, else ``idx`` itself."""
+    if len(idx) and np.array_equal(idx, np.arange(idx[0], idx[0] + len(idx))):
+        return slice(int(idx[0]), int(idx[0]) + len(idx))
+    return idx

@@ -1,0 +1,69 @@
+"""`pelvic-walk bench`: it runs and writes every key of INTERFACES.md (no timing assertions)."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import pytest
+
+from app.bench import BACKENDS, QP_LAYERS, main
+
+INTERFACE_KEYS = (
+    "tick_ms_median",
+    "tick_ms_p99",
+    "realtime_factor",
+    "bare_step_realtime_factor",
+    "overhead_ratio",
+)
+LAYERS = ("com_mpc", "pelvis_mpc", "ik", "arm_swing", "kinematics")
+
+
+def _finite_positive(x) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and math.isfinite(x) and x > 0
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory) -> dict:
+    path = tmp_path_factory.mktemp("bench") / "b.json"
+    assert main(path, ticks=200) == 0
+    return json.loads(path.read_text())
+
+
+def test_interface_keys_are_finite_and_positive(report):
+    for key in INTERFACE_KEYS:
+        assert _finite_positive(report[key]), (key, report[key])
+    assert set(LAYERS) <= set(report["layer_ms"])
+    for name in LAYERS:
+        assert _finite_positive(report["layer_ms"][name]), (name, report["layer_ms"][name])
+
+
+def test_overhead_ratio_is_the_ratio_of_the_two_factors(report):
+    ratio = report["bare_step_realtime_factor"] / report["realtime_factor"]
+    assert report["overhead_ratio"] == pytest.approx(ratio)
+
+
+def test_qp_backend_table(report):
+    assert report["backend"] in BACKENDS
+    for layer in QP_LAYERS:
+        row = report["qp_backends"][layer]
+        assert row["n_qps"] == report["ticks"]
+        for backend in BACKENDS:
+            cell = row[backend]
+            assert _finite_positive(cell["solve_us_median"])
+            assert math.isfinite(cell["max_abs_dev"]) and cell["max_abs_dev"] >= 0.0
+            assert cell["failures"] == 0
+    # the exact back-end reproduces the exact solution (the timings are not checked)
+    for layer in QP_LAYERS:
+        assert report["qp_backends"][layer]["daqp"]["max_abs_dev"] < 1e-8
+
+
+def test_the_walk_did_not_fall_and_the_peer_is_quoted(report):
+    assert report["fell"] is False
+    assert report["peer"]["measured_in_this_run"] is False
+    assert _finite_positive(report["peer"]["tick_ms_p99"])
+
+
+def test_bad_ticks_exit_2(capsys):
+    assert main(None, ticks=0) == 2
+    assert "ticks" in capsys.readouterr().err
