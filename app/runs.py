@@ -29,6 +29,7 @@ GRAVITY = 9.81
 # within ~0.01 rad of straight (kappa 1283 there, 128 at 0.1 rad: tests/test_kinematics.py).
 KAPPA_SINGULAR = 1000.0
 LANDING_ERROR_CLEAN = 0.02  # [m]
+KAPPA_EXACTLY_SINGULAR = 1e16  # reported for kappa = inf (sigma_min at machine precision)
 SUMMARY_KEYS = (
     "method", "arms", "step_length", "step_time", "steps_planned", "steps_completed",
     "success", "fell", "fall_time", "landing_error_max", "waist_yaw_max_deg",
@@ -207,7 +208,9 @@ class Session:
 
         def peak(name: str, scale: float = 1.0) -> float:
             col = s.column(name)[walking]
-            col = col[np.isfinite(col)]
+            # NaN = not recorded; an exactly singular J (kappa = inf) counts, capped so the
+            # summary stays valid JSON.
+            col = np.nan_to_num(col[~np.isnan(col)], posinf=KAPPA_EXACTLY_SINGULAR)
             return float(np.max(np.abs(col)) * scale) if len(col) else 0.0
 
         return {
