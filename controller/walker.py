@@ -131,7 +131,8 @@ class Walker:
         self.pelvis_mpc = PelvisMpc(params.pelvis, params.com.sample_time, n, self.dt, backend)
         self.ik_solver = QpSolver(backend)
         self.arm_solver = QpSolver(backend)
-        self.theta_dot = 0.0
+        self.theta_dot = 0.0  # [rad/s] the pelvic MPC's integrated rate (eq. 38)
+        self._last_waist_rate = 0.0  # [rad/s] waist rate of the last IK solution
         self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
         self._pending: ControllerParams | None = None
         self._com_des_prev: np.ndarray | None = None
@@ -157,6 +158,8 @@ class Walker:
             self.pelvis_mpc.set_params(new.pelvis, new.com.sample_time, horizon_samples(new.com))
         if new.method != old.method:
             self.ik_solver.reset()
+            # The pelvic MPC's rate state starts from the waist rate the IK last commanded.
+            self.theta_dot = self._last_waist_rate
         self.params = new
 
     @property
@@ -259,6 +262,7 @@ class Walker:
         if not ok:
             failures["ik"] = True
             q_dot_low = np.zeros(13)  # fall back: hold the last command
+        self._last_waist_rate = float(q_dot_low[0])
         speed_limited = bool(np.abs(q_dot_low).max() >= p.ik.joint_speed_limit * 0.999)
         t0 = lap("ik", t0)
 
@@ -302,7 +306,7 @@ class Walker:
             p_world_feet_des=np.array([feet_now.p_left, feet_now.p_right]),
             zmp_ref=self.plan.zmp_reference_one(t),
             waist_angle=float(self.q_cmd[lower[0]]),
-            waist_rate=float(q_dot_low[0]),
+            waist_rate=self._last_waist_rate,
             h_low=float(ks.cmm_yaw_low @ q_dot_low),
             h_up=float(ks.cmm_yaw_up @ q_dot_up),
             kappa=kappa,

@@ -112,3 +112,17 @@ def test_controller_is_pure():
             else:
                 continue
             assert not banned & set(names), f"{path.name} imports {names}"
+
+
+def test_switching_method_live_keeps_walking():
+    """fixed -> mpc -> redundancy mid-walk: the robot keeps walking, the waist starts turning."""
+    session = Session(RunConfig(params=_params("fixed", 0.25, 6)))
+    angles = []
+    for method in ("fixed", "mpc", "redundancy"):
+        session.walker.replace_params(method=method)
+        for _ in range(300):
+            out = session.tick()
+            angles.append((method, out.waist_angle))
+    assert not session.fell
+    assert max(abs(a) for m, a in angles if m == "fixed") < 1e-9
+    assert max(abs(a) for m, a in angles if m == "mpc") > np.deg2rad(3)
