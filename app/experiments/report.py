@@ -329,9 +329,10 @@ def _dsp_note(study: Study, data: dict[str, Any]) -> list[str]:
         "atan(k_pel dx_R / h)] with the nominal lateral distance h, is stationary in the pelvis "
         "position when the pelvis is midway between the feet (its derivative is zero where "
         "|dx_L| = |dx_R|); our plan's CoM passes that point during the DSP, and the MPC tracks "
-        "the reference closely (beta_pel small), so there is nothing to turn toward until the "
-        "swing starts moving the foot. The MPC's angle is still smooth and its rate has no "
-        "sharp change, unlike redundancy's (the next claim).",
+        "the reference closely (beta_pel small), so its angle passes its extremum inside the DSP "
+        "and has reversed toward the coming swing by lift-off (table above), without moving "
+        "far. The MPC's angle is smooth and its rate has no sharp change, unlike "
+        "redundancy's (the next claim).",
         "",
     ]
 
