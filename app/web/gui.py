@@ -388,22 +388,22 @@ def analysis_svg(theta_deg: float) -> str:
     foot0, foot1 = px(step0, -0.12), px(step, -0.12)
     rear = px(0.0, -0.12)
     return f"""
-<svg viewBox="0 0 320 192" width="100%" xmlns="http://www.w3.org/2000/svg"
+<svg viewBox="0 0 320 198" width="100%" xmlns="http://www.w3.org/2000/svg"
      style="font: 11px sans-serif; background: #f6f7f9; border-radius: 6px">
   <text x="8" y="16">top view, walking to the right; pelvis turned {theta_deg:.0f} deg</text>
   <line x1="{lx:.1f}" y1="{ly:.1f}" x2="{rx:.1f}" y2="{ry:.1f}" stroke="#444" stroke-width="6"
         stroke-linecap="round"/>
   <circle cx="{lx:.1f}" cy="{ly:.1f}" r="6" fill="#4682ff"/>
   <circle cx="{rx:.1f}" cy="{ry:.1f}" r="6" fill="#ff5050"/>
-  <line x1="{rear[0]:.1f}" y1="{rear[1] + 22:.1f}" x2="{foot0[0]:.1f}" y2="{foot0[1] + 22:.1f}"
+  <line x1="{rear[0]:.1f}" y1="{rear[1] + 8:.1f}" x2="{foot0[0]:.1f}" y2="{foot0[1] + 8:.1f}"
         stroke="#999" stroke-width="3"/>
-  <line x1="{rear[0]:.1f}" y1="{rear[1] + 36:.1f}" x2="{foot1[0]:.1f}" y2="{foot1[1] + 36:.1f}"
+  <line x1="{rear[0]:.1f}" y1="{rear[1] + 22:.1f}" x2="{foot1[0]:.1f}" y2="{foot1[1] + 22:.1f}"
         stroke="#28b464" stroke-width="3"/>
-  <text x="8" y="{rear[1] + 26:.1f}">eq. 4</text>
-  <text x="8" y="{rear[1] + 40:.1f}">eq. 5</text>
-  <text x="{foot0[0] + 4:.1f}" y="{foot0[1] + 26:.1f}">{step0:.3f} m</text>
-  <text x="{foot1[0] + 4:.1f}" y="{foot1[1] + 40:.1f}">{step:.3f} m
+  <text x="8" y="{rear[1] + 12:.1f}">eq. 4</text>
+  <text x="8" y="{rear[1] + 26:.1f}">eq. 5</text>
+  <text x="{foot0[0] + 4:.1f}" y="{foot0[1] + 12:.1f}">{step0:.3f} m</text>
+  <text x="{foot1[0] + 4:.1f}" y="{foot1[1] + 26:.1f}">{step:.3f} m
     (+{100 * (step / step0 - 1):.0f} %)</text>
-  <text x="8" y="168">hip advance {1000 * (hx[1] - hx[0]):.0f} mm (eq. 2)</text>
-  <text x="8" y="183">l_leg {l_leg} m, z0 {z0} m, l_pel {l_pel} m</text>
+  <text x="8" y="176">hip advance {1000 * (hx[1] - hx[0]):.0f} mm (eq. 2)</text>
+  <text x="8" y="191">l_leg {l_leg} m, z0 {z0} m, l_pel {l_pel} m</text>
 </svg>"""
