@@ -515,48 +515,33 @@ def _energy_claims(e: dict[str, Any]) -> list[dict[str, str]]:
                 "MPC mean < redundancy mean at each of these lengths (partly: at one)",
             )
         )
-    # (c) below 0.2 m rotation costs less than the fixed pelvis.
-    short = [x for x in lengths if x <= 0.20 + 1e-9]
-    checks = []
-    for x in short:
-        f = _cell(e, "fixed", x)
-        for m in ROTATING:
-            r = _cell(e, m, x)
-            if f and r:
-                checks.append((x, m, r["mean"], f["mean"], _vs(r, f)))
-    if checks:
-        wins = [c for c in checks if c[2] < c[3]]
+    # (c) up to 0.2 m rotation costs less, (d) from 0.25 to 0.30 m more, than the fixed pelvis.
+    for key, lo, hi, cheaper, claim, paper, rule in (
+        ("energy_short", 0.0, 0.20, True,
+         "up to 0.20 m walking with pelvic rotation costs less than with the fixed pelvis",
+         "0.15: 12.8 / 10.1 vs 14.8 J; 0.20: 18.2 / 16.9 vs 19.1 J",
+         "both rotating methods' means below the fixed pelvis's at every length <= 0.20 m"),
+        ("energy_mid", 0.20, 0.30, False,
+         "from 0.25 to 0.30 m pelvic rotation costs more than the fixed pelvis",
+         "0.25: 27.1 / 26.5 vs 19.8 J; 0.30: 60.5 / 157.9 vs 50.2 J",
+         "both rotating methods' means above the fixed pelvis's at 0.25-0.30 m"),
+    ):
+        checks = []
+        for x in (x for x in lengths if lo + 1e-9 < x <= hi + 1e-9):
+            f = _cell(e, "fixed", x)
+            for m in ROTATING:
+                r = _cell(e, m, x)
+                if f and r:
+                    checks.append((x, m, r["mean"], f["mean"], _vs(r, f)))
+        if not checks:
+            continue
+        wins = [c for c in checks if (c[2] < c[3]) == cheaper]
         claims.append(
             _claim(
-                "energy_short",
-                "5",
-                "up to 0.20 m walking with pelvic rotation costs less than with the fixed pelvis",
-                "0.15: 12.8 / 10.1 vs 14.8 J; 0.20: 18.2 / 16.9 vs 19.1 J",
+                key, "5", claim, paper,
                 "; ".join(f"{x:.2f} {m}: {txt}" for x, m, _, _, txt in checks),
                 "holds" if len(wins) == len(checks) else ("partly" if wins else "does not hold"),
-                "both rotating methods' means below the fixed pelvis's at every length <= 0.20 m",
-            )
-        )
-    # (d) above 0.2 m rotation costs more than the fixed pelvis (paper's text).
-    mid = [x for x in lengths if 0.20 + 1e-9 < x <= 0.30 + 1e-9]
-    checks = []
-    for x in mid:
-        f = _cell(e, "fixed", x)
-        for m in ROTATING:
-            r = _cell(e, m, x)
-            if f and r:
-                checks.append((x, m, r["mean"], f["mean"], _vs(r, f)))
-    if checks:
-        wins = [c for c in checks if c[2] > c[3]]
-        claims.append(
-            _claim(
-                "energy_mid",
-                "5",
-                "from 0.25 to 0.30 m pelvic rotation costs more than the fixed pelvis",
-                "0.25: 27.1 / 26.5 vs 19.8 J; 0.30: 60.5 / 157.9 vs 50.2 J",
-                "; ".join(f"{x:.2f} {m}: {txt}" for x, m, _, _, txt in checks),
-                "holds" if len(wins) == len(checks) else ("partly" if wins else "does not hold"),
-                "both rotating methods' means above the fixed pelvis's at 0.25-0.30 m",
+                rule,
             )
         )
     return claims
