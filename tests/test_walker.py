@@ -126,3 +126,33 @@ def test_switching_method_live_keeps_walking():
     assert not session.fell
     assert max(abs(a) for m, a in angles if m == "fixed") < 1e-9
     assert max(abs(a) for m, a in angles if m == "mpc") > np.deg2rad(3)
+
+
+@pytest.mark.parametrize("layer", ["ik_solver", "arm_solver", "pelvis_mpc", "com_mpc"])
+def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
+    """Every layer's QP fails for 10 ticks (0.05 s) mid-walk: no crash, counted, still walks."""
+    from controller.qp import QpResult
+
+    session = Session(RunConfig(params=_params("mpc", 0.2, 3)))
+    owner = getattr(session.walker, layer)
+    solver = owner if layer.endswith("_solver") else owner.solver
+    real_solve = solver.solve
+    calls = {"n": 0}
+
+    def flaky(qp):
+        calls["n"] += 1
+        if 400 <= calls["n"] < 410:
+            solver.failures += 1
+            fallback = solver.x_prev if solver.x_prev is not None else np.zeros(len(qp.q))
+            return QpResult(fallback, False, "forced failure")
+        return real_solve(qp)
+
+    solver.solve = flaky
+    while not session.done:
+        out = session.tick()
+        assert np.all(np.isfinite(out.q_target))
+    s = session.summary()
+    name = {"ik_solver": "ik", "arm_solver": "arm_swing"}.get(layer, layer)
+    assert s["solver_failures_by_layer"][name] == 10
+    assert s["solver_failures"] == 10
+    assert not s["fell"]
