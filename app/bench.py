@@ -93,7 +93,6 @@ def closed_loop(ticks: int) -> dict[str, Any]:
     warm = _warmup_ticks(session)
     for _ in range(warm):
         session.tick()
-    first = len(session.tick_ms)
     layer_s: list[dict[str, float]] = []
     cpu0 = time.process_time()
     start = time.perf_counter()
@@ -101,7 +100,7 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         layer_s.append(session.tick().layer_s)
     wall = time.perf_counter() - start
     cpu = time.process_time() - cpu0
-    tick = np.array(session.tick_ms[first:])
+    tick = session.series.column("tick_ms", last=ticks)
     sim_time = ticks * session.params.control_dt
     return {
         "tick_ms_median": float(np.median(tick)),

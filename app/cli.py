@@ -8,6 +8,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import os
 import sys
 from pathlib import Path
 from typing import Any, NoReturn
@@ -145,9 +146,29 @@ def _analyze(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_output_paths(args: argparse.Namespace) -> str | None:
+    """A one-line complaint if an output file cannot be written (checked before any run)."""
+    for flag in ("json", "csv"):
+        path = getattr(args, flag, None)
+        if path is None:
+            continue
+        parent = path.resolve().parent
+        if not parent.is_dir():
+            return f"--{flag} {path}: folder {parent} does not exist"
+        if not os.access(parent, os.W_OK) or (path.exists() and not os.access(path, os.W_OK)):
+            return f"--{flag} {path}: not writable"
+        if path.is_dir():
+            return f"--{flag} {path}: is a folder, not a file"
+    return None
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    problem = _check_output_paths(args)
+    if problem:
+        print(f"pelvic-walk {args.command}: error: {problem}", file=sys.stderr)
+        return 2
     try:
         if args.command == "simulate":
             return _simulate(args)

@@ -81,7 +81,6 @@ class Session:
         self.zmp_ticks = 0
         self.zmp_inside = 0
         self.speed_limited_ticks = 0
-        self.tick_ms: list[float] = []
         self.last: TickOutput | None = None
         self._com_vel_prev: np.ndarray | None = None
         self.wall_time = 0.0
@@ -106,22 +105,21 @@ class Session:
         t0 = time.perf_counter()
         out = w.tick(q_meas)
         tick_ms = (time.perf_counter() - t0) * 1e3
-        self.tick_ms.append(tick_ms)
         world.step(out.q_target)
-        self._measure(out, tick_ms)
+        self._measure(out, tick_ms, q_meas)
         self.last = out
         self.wall_time += time.perf_counter() - wall0
         return out
 
     # -- measurement -------------------------------------------------------------------------
-    def _measure(self, out: TickOutput, tick_ms: float) -> None:
+    def _measure(self, out: TickOutput, tick_ms: float, q_meas: np.ndarray) -> None:
         world, plan, s = self.world, self.walker.plan, self.series
         t = self.walker.t  # time after the step
         contacts = world.contacts()
         row = s.new_row()
         ix = s.index
         row[ix["t"]] = t
-        row[ix["waist_angle"]] = world.q_joints()[0]
+        row[ix["waist_angle"]] = q_meas[0]  # measured at the start of the tick
         row[ix["waist_angle_cmd"]] = out.waist_angle
         row[ix["waist_rate"]] = out.waist_rate
         row[ix["theta_ref"]] = out.theta_ref[0]
@@ -162,11 +160,14 @@ class Session:
         # Step bookkeeping: energy at step starts, landing error half a DSP after touch-down.
         k = out.step_index
         n = len(plan.step_start)
-        if 0 <= k < n and k not in self.energy_at_step_start:
+        if 0 <= k < n and k not in self.energy_at_step_start and not self.fell:
             self.energy_at_step_start[k] = float(world.energy_per_joint.sum())
         j = len(self.landings)  # landings are recorded in order: the first one not yet checked
         if j < n:
-            check_time = plan.step_start[j] + plan.walk.step_time + 0.5 * plan.dsp_time
+            # half of the next DSP after this step's touch-down (per-step timing: a replan
+            # changes the timing of later steps only)
+            next_dsp = plan.step_dsp[j + 1] if j + 1 < n else plan.final_dsp_time
+            check_time = plan.step_start[j] + plan.step_duration[j] + 0.5 * next_dsp
             if t >= check_time and not self.fell:
                 soles = world.sole_positions()
                 side = int(plan.swing_side[j])
@@ -192,14 +193,16 @@ class Session:
         landed = [self.landings[j] for j in sorted(self.landings)]
         steps_completed = sum(1 for j in self.landings if j < n_walk)
         walking = (s.column("step_index") >= 0) & (s.column("step_index") < len(plan.step_start))
-        starts = [self.energy_at_step_start[k] for k in sorted(self.energy_at_step_start)
-                  if k < n_walk]
-        if len(self.energy_at_step_start) > n_walk - 1 and not self.fell:
-            # close the last window at the start of the closing step
-            starts.append(self.energy_at_step_start.get(n_walk, np.nan))
-        windows = two_step_windows(np.array(starts)) if starts else np.zeros(0)
-        windows = windows[np.isfinite(windows)]
-        tick = np.array(self.tick_ms) if self.tick_ms else np.zeros(1)
+        if self.fell:  # peaks up to the fall, not the impact after it
+            walking &= s.column("t") <= self.fall_time
+        # Energy per two-step window (eq. 44): windows start at step 1, skipping step 0 (the
+        # start from standing moves the foot one step length, later swings two); the last
+        # window closes at the start of the closing step (index n_walk).
+        starts = [self.energy_at_step_start[k] for k in range(1, n_walk + 1)
+                  if k in self.energy_at_step_start]
+        windows = two_step_windows(np.array(starts))
+        tick = s.column("tick_ms")
+        tick = tick[np.isfinite(tick)] if len(tick) else np.zeros(1)
         sim_time = float(self.walker.t)
         failures = sum(self.walker.failure_counts.values())
         success = (not self.fell) and self.walker.finished and len(self.landings) == len(

@@ -222,10 +222,6 @@ class FootstepPlan:
         loc = self._locate(times)
         return (self._zmp_reference(loc), *self._zmp_bounds(loc, margin))
 
-    def _ground_feet(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Two foot centres (N, 2) each that bound the support area (equal in SSP)."""
-        return self._ground_feet_at(self._locate(times))
-
     def _ground_feet_at(self, loc: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
         _, idx, k, tau = loc
         in_ssp = tau >= self.step_dsp[k]
@@ -281,7 +277,10 @@ class FootstepPlan:
                 walk, self.t_start, int(self.swing_side[0]), float(self.feet_init[LEFT, 0])
             )
         if started > self.n_walking_steps:  # the closing step has started
-            return dataclasses.replace(self, walk=walk)
+            return dataclasses.replace(
+                self, walk=walk, dsp_time=walk.dsp_ratio * walk.step_time,
+                ssp_time=walk.step_time - walk.dsp_ratio * walk.step_time,
+            )
         steps = _Steps()
         for j in range(started):
             steps.add(

@@ -237,3 +237,29 @@ def test_pages(client):
     assert client.get("/report/../pyproject.toml").status_code == 404
     assert client.get("/docs").status_code == 200
     assert "/api/params" in client.get("/openapi.json").json()["paths"]
+
+
+def test_run_manager_is_bounded():
+    """More than max_pending queued runs are refused (429 at the API), old records pruned."""
+    from app.web.api import RunBusy, RunManager
+    from controller.params import ControllerParams
+
+    manager = RunManager(max_pending=2, keep=3)
+    blocker = __import__("threading").Event()
+    manager._work = lambda run_id, *_: blocker.wait(30)  # hold the worker: runs stay queued
+    params = ControllerParams()
+    manager.submit(params, None)
+    manager.submit(params, None)
+    with pytest.raises(RunBusy):
+        manager.submit(params, None)
+    blocker.set()
+    manager.shutdown()
+    for i in range(5):  # finished records beyond `keep` are pruned
+        manager._runs[f"done{i}"] = {"id": f"done{i}", "status": "done"}
+    manager._pool = __import__("concurrent.futures").futures.ThreadPoolExecutor(1)
+    manager._work = lambda *a: None
+    for rec in manager._runs.values():
+        rec["status"] = "done"
+    manager.submit(params, None)
+    assert len(manager._runs) <= 4
+    manager.shutdown()

@@ -23,6 +23,9 @@ BAD = [
     ["simulate", "--method", "mpc", "--step-length", "0.2", "--step-time", "inf"],
     ["simulate", "--step-length", "0.2"],
     ["fly"],
+    ["simulate", "--method", "fixed", "--step-length", "0.2", "--json", "/nonexistent/x.json"],
+    ["simulate", "--method", "fixed", "--step-length", "0.2", "--csv", "/"],
+    ["bench", "--json", "/nonexistent/b.json"],
 ]
 
 

@@ -156,3 +156,29 @@ def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
     assert s["solver_failures_by_layer"][name] == 10
     assert s["solver_failures"] == 10
     assert not s["fell"]
+
+
+def test_energy_windows_skip_the_start_and_landings_follow_a_replan():
+    """Two-step energy windows start at step 1; a step-time change keeps landing checks right."""
+    session = Session(RunConfig(params=_params("fixed", 0.2, 6)))
+    for _ in range(500):  # into step 1
+        session.tick()
+    session.walker.replace_params(walk=dict(step_time=0.9))
+    while not session.done:
+        session.tick()
+    s = session.summary()
+    assert s["success"]
+    assert max(s["landing_errors"]) < 0.02  # measured after each (re-timed) touch-down
+    # steps 1..6 (6 = the closing step's start): windows (1->3), (3->5)
+    assert len(s["energy_two_step_windows"]) == 2
+    w = np.array(s["energy_two_step_windows"])
+    assert np.all(w > 0) and np.std(w) < 0.5 * np.mean(w)
+
+
+def test_peaks_stop_at_a_fall():
+    session = run(RunConfig(params=_params("fixed", 0.5, 6)))
+    s = session.summary()
+    assert s["fell"]
+    t = session.series.column("t")
+    ym = np.abs(session.series.column("yaw_momentum"))
+    assert s["yaw_momentum_peak"] == pytest.approx(np.max(ym[t <= s["fall_time"]]))

@@ -187,20 +187,38 @@ def _error_line(err: dict[str, Any]) -> str:
     return f"{loc}: {msg}{tail}" if loc else f"{msg}{tail}"
 
 
-class RunManager:
-    """Headless runs (``app.runs.run``) in one background worker thread."""
+class RunBusy(RuntimeError):
+    """Too many headless runs queued or running."""
 
-    def __init__(self, max_wall_s: float = 600.0):
+
+class RunManager:
+    """Headless runs (``app.runs.run``) in one background worker thread.
+
+    Bounded: at most ``max_pending`` runs queued or running (they share the CPU with the live
+    loop), and only the ``keep`` most recent records are kept.
+    """
+
+    def __init__(self, max_wall_s: float = 600.0, max_pending: int = 4, keep: int = 100):
         self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="headless-run")
         self._lock = threading.Lock()
         self._runs: dict[str, dict[str, Any]] = {}
         self.max_wall_s = max_wall_s
+        self.max_pending = max_pending
+        self.keep = keep
 
     def submit(self, params: ControllerParams, seed: int | None) -> str:
+        """Queue a run; RunBusy if ``max_pending`` runs are already queued or running."""
         run_id = uuid.uuid4().hex[:12]
         with self._lock:
+            pending = sum(r["status"] in ("queued", "running") for r in self._runs.values())
+            if pending >= self.max_pending:
+                raise RunBusy(f"{pending} headless runs are already queued or running; "
+                              "poll GET /api/runs/{id} and try again when one is done")
             self._runs[run_id] = {"id": run_id, "status": "queued", "summary": None,
                                   "error": None, "submitted": time.time()}
+            finished = [k for k, r in self._runs.items() if r["status"] in ("done", "error")]
+            for old in finished[: max(0, len(self._runs) - self.keep)]:
+                del self._runs[old]
         self._pool.submit(self._work, run_id, params, seed)
         return run_id
 
@@ -283,10 +301,9 @@ def create_app(live: LiveSim, viser_port: int = 8080, runs: RunManager | None = 
     @params_router.put("", response_model=ParamsModel)
     def put_params(body: ParamsUpdate) -> dict[str, Any]:  # type: ignore[valid-type]
         try:
-            params = live.intent.params.replace(**_updates(body))
+            version = live.update_params(**_updates(body))
         except (ValueError, TypeError) as exc:
             raise _unprocessable(str(exc)) from None
-        version = live.set_params(params)
         if body.methods is not None:  # type: ignore[attr-defined]
             version = live.set_methods(body.methods)  # type: ignore[attr-defined]
         live.wait_applied(version, APPLY_TIMEOUT_S)
@@ -371,7 +388,10 @@ def create_app(live: LiveSim, viser_port: int = 8080, runs: RunManager | None = 
             params = ControllerParams().replace(method=body.method, **_updates(body))  # type: ignore[attr-defined]
         except (ValueError, TypeError) as exc:
             raise _unprocessable(str(exc)) from None
-        run_id = runs.submit(params, body.seed)  # type: ignore[attr-defined]
+        try:
+            run_id = runs.submit(params, body.seed)  # type: ignore[attr-defined]
+        except RunBusy as exc:
+            raise HTTPException(429, detail=str(exc)) from None
         return runs.get(run_id) or {}
 
     @runs_router.get("/{run_id}", response_model=RunStatus)

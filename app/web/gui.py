@@ -279,9 +279,11 @@ class ControlPanel:
     def apply_preset(self, name: str) -> None:
         """Apply one of :data:`PRESETS` (parameters, and methods if it names them)."""
         preset = PRESETS[name]
-        params = live_params() if preset.get("reset_groups") else self.live.intent.params
         groups = {k: v for k, v in preset.items() if k not in ("methods", "reset_groups")}
-        self.live.set_params(params.replace(**groups))
+        if preset.get("reset_groups"):
+            self.live.set_params(live_params().replace(**groups))
+        else:
+            self.live.update_params(**groups)
         if "methods" in preset:
             self.live.set_methods(preset["methods"])
 

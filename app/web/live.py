@@ -165,10 +165,8 @@ class _Robot:
         self.last_walk_success: bool | None = None
         self.error: str | None = None
         self.session = self._new_session(params)
-        self._energy_ring: deque[tuple[float, float]] = deque()
 
     def _new_session(self, params: ControllerParams) -> Session:
-        self._energy_ring = deque()
         self.error = None
         self.fell_at: float | None = None  # robot time of the fall
         return Session(RunConfig(params=dataclasses.replace(params, method=self.method)),
@@ -227,9 +225,13 @@ class LiveSim:
             return self._intent
 
     def _update(self, **changes) -> int:
+        return self._modify(lambda _cur: changes)
+
+    def _modify(self, changes_of: Callable[[Intent], dict]) -> int:
+        """Read, change and write the intent atomically (concurrent writers lose nothing)."""
         with self._lock:
             cur = self._intent
-            new = dataclasses.replace(cur, version=cur.version + 1, **changes)
+            new = dataclasses.replace(cur, version=cur.version + 1, **changes_of(cur))
             self._intent = new
         self._wake.set()
         return new.version
@@ -241,9 +243,7 @@ class LiveSim:
 
     def update_params(self, **groups) -> int:
         """Partial change, e.g. ``update_params(walk={"step_length": 0.3})``; ValueError."""
-        with self._lock:
-            params = self._intent.params.replace(**groups)
-        return self.set_params(params)
+        return self._modify(lambda cur: {"params": cur.params.replace(**groups)})
 
     def set_methods(self, methods: Sequence[str]) -> int:
         methods = check_methods(methods)
@@ -262,15 +262,11 @@ class LiveSim:
 
     def step(self) -> int:
         """Pause (if running) and advance exactly one control period."""
-        with self._lock:
-            steps = self._intent.step_requests + 1
-        return self._update(paused=True, step_requests=steps)
+        return self._modify(lambda cur: {"paused": True, "step_requests": cur.step_requests + 1})
 
     def reset(self) -> int:
         """Restart every robot from standing (t = 0)."""
-        with self._lock:
-            resets = self._intent.reset_requests + 1
-        return self._update(reset_requests=resets)
+        return self._modify(lambda cur: {"reset_requests": cur.reset_requests + 1})
 
     # -- frames (any thread) -------------------------------------------------------------
     def frame(self) -> LiveFrame | None:
@@ -287,7 +283,7 @@ class LiveSim:
                 if f is not None and f.intent_version >= version:
                     return f
                 left = deadline - time.monotonic()
-                if left <= 0 or self._stop.is_set():
+                if left <= 0 or self._stop.is_set() or not self.running:
                     return None
                 self._changed.wait(left)
 
