@@ -428,7 +428,9 @@ def _section5(study: Study, data: dict[str, Any]) -> list[str]:
         "",
         f"**Ours:** {e['repeats']} runs of {e['steps']} steps per cell, each with a seeded "
         "perturbation of the initial state (`RunConfig(seed=k, perturbation=0.01)`), arm swing "
-        "on; windows from the runs that did not fall (— where all fell, as the paper marks a "
+        "on; the windows start at step 1 (step 0 starts from standing and moves the foot one "
+        "step length, later steps two), so a 20-step run gives 9 windows; windows from the runs "
+        "that did not fall (— where all fell, as the paper marks a "
         "method that cannot walk the length); † marks cells whose runs walked but were not all "
         "clean (see section 2).",
         "",
