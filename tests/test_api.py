@@ -241,25 +241,26 @@ def test_pages(client):
 
 def test_run_manager_is_bounded():
     """More than max_pending queued runs are refused (429 at the API), old records pruned."""
+    import threading
+
     from app.web.api import RunBusy, RunManager
     from controller.params import ControllerParams
 
-    manager = RunManager(max_pending=2, keep=3)
-    blocker = __import__("threading").Event()
-    manager._work = lambda run_id, *_: blocker.wait(30)  # hold the worker: runs stay queued
     params = ControllerParams()
+    manager = RunManager(max_pending=2, keep=3)
+    release = threading.Event()
+    manager._work = lambda *_: release.wait(30)  # hold the worker: the runs stay pending
     manager.submit(params, None)
     manager.submit(params, None)
     with pytest.raises(RunBusy):
         manager.submit(params, None)
-    blocker.set()
+    release.set()
     manager.shutdown()
-    for i in range(5):  # finished records beyond `keep` are pruned
+
+    manager = RunManager(max_pending=2, keep=3)
+    manager._work = lambda *_: None
+    for i in range(5):  # finished records beyond `keep` are pruned on the next submit
         manager._runs[f"done{i}"] = {"id": f"done{i}", "status": "done"}
-    manager._pool = __import__("concurrent.futures").futures.ThreadPoolExecutor(1)
-    manager._work = lambda *a: None
-    for rec in manager._runs.values():
-        rec["status"] = "done"
     manager.submit(params, None)
-    assert len(manager._runs) <= 4
+    assert len(manager._runs) == 3
     manager.shutdown()
