@@ -46,7 +46,7 @@ import numpy as np
 from app.runs import RunConfig, Session
 from app.sim.world import World
 from controller.params import ControllerParams
-from controller.qp import INF, QP, QpSolver
+from controller.qp import INF, QP, QpSolver, frozen
 
 STEP_LENGTH = 0.3  # [m]
 METHOD = "mpc"
@@ -194,13 +194,18 @@ def _wrap(solver: QpSolver, out: list[QP], recording: list[bool]) -> None:
 
     def solve(qp: QP):
         if recording[0]:
-            P = last["P"] if qp.P is last.get("P_obj") else qp.P.copy()
-            A = last["A"] if qp.A is last.get("A_obj") else qp.A.copy()
+            P = last["P"] if qp.P is last.get("P_obj") else _copy(qp.P)
+            A = last["A"] if qp.A is last.get("A_obj") else _copy(qp.A)
             last.update(P=P, A=A, P_obj=qp.P, A_obj=qp.A)
             out.append(QP(P, qp.q.copy(), A, qp.l.copy(), qp.u.copy()))
         return original(qp)
 
     solver.solve = solve  # type: ignore[method-assign]
+
+
+def _copy(a: np.ndarray) -> np.ndarray:
+    """A copy that is read-only if the original was (the solver's identity shortcut)."""
+    return a.copy() if a.flags.writeable else frozen(a.copy())
 
 
 def exact_solution(qp: QP) -> np.ndarray:
@@ -209,9 +214,9 @@ def exact_solution(qp: QP) -> np.ndarray:
     bl = np.maximum(qp.l, -INF)
     sense = np.where(np.abs(bu - bl) < 1e-12, 5, 0).astype(np.intc)
     x, _, flag, _ = daqp.solve(
-        np.ascontiguousarray(qp.P),
+        np.require(qp.P, dtype=float, requirements=("C", "W")),
         np.ascontiguousarray(qp.q),
-        np.ascontiguousarray(qp.A),
+        np.require(qp.A, dtype=float, requirements=("C", "W")),
         bu,
         bl,
         sense,

@@ -29,7 +29,7 @@ import numpy as np
 
 from controller.ik import velocity_bounds
 from controller.params import ArmParams
-from controller.qp import QP, QpSolver
+from controller.qp import QP, QpSolver, frozen
 
 
 def yaw_momentum(a_yaw: np.ndarray, q_dot: np.ndarray) -> float:
@@ -82,9 +82,9 @@ _BOUND_ROWS: dict[int, np.ndarray] = {}
 
 
 def _bound_rows(n: int) -> np.ndarray:
-    """(n, n) identity, one shared object per size (the QP solver tracks A by identity)."""
+    """(n, n) identity, one shared read-only object per size (controller.qp)."""
     if n not in _BOUND_ROWS:
-        _BOUND_ROWS[n] = np.eye(n)
+        _BOUND_ROWS[n] = frozen(np.eye(n))
     return _BOUND_ROWS[n]
 
 

@@ -16,15 +16,16 @@ Paper symbols -> code names:
     Delta V (eq. 18) = ``dvel_from_state`` x_0 + ``dvel_from_jerk`` U = [v_1 - v_0, v_2 - v_1,
         ..., v_N - v_{N-1}] (the first difference uses the current velocity v_0);
     alpha, beta, gamma (eq. 18) -> ``ComMpcParams.alpha``, ``beta``, ``gamma`` (same for x, y);
-    Z^min, Z^max (eq. 18) -> :meth:`controller.footsteps.FootstepPlan.zmp_bounds` with
-        ``ComMpcParams.zmp_margin``; Z^ref -> ``FootstepPlan.zmp_reference``.
+    Z^min, Z^max (eq. 18) -> ``PlanSample.zmp_lo`` / ``zmp_hi`` of
+        :meth:`controller.footsteps.FootstepPlan.sample` with ``ComMpcParams.zmp_margin``;
+        Z^ref -> ``PlanSample.zmp_ref``.
 
 The QP (one for both axes, 2N variables U = [U_x; U_y], block diagonal):
     min 1/2 U' P U + q' U  s.t.  Z^min - Pzs x_0 <= Pzu U <= Z^max - Pzs x_0, with
     P = alpha Pzu'Pzu + beta Pdu'Pdu + gamma I, q = alpha Pzu'(Pzs x_0 - Z^ref)
     + beta Pdu'(Pds x_0) per axis. P and the constraint matrix depend on the parameters only
-    and are built once (closed-form index arithmetic, no loop over the horizon); a tick
-    changes q, l, u only, and :class:`controller.qp.QpSolver` warm-starts OSQP.
+    and are built once (closed-form index arithmetic, no loop over the horizon) and frozen; a
+    tick changes q, l, u only, and :class:`controller.qp.QpSolver` warm-starts the solver.
 
 Choices where the paper is vague:
 - The samples are at t + k T_p, k = 1..N, with N = ``horizon_samples(params)``; the ZMP is
@@ -44,7 +45,7 @@ import numpy as np
 
 from controller.footsteps import FootstepPlan
 from controller.params import ComMpcParams, horizon_samples
-from controller.qp import QP, QpSolver
+from controller.qp import QP, QpSolver, frozen
 
 GRAVITY = 9.81  # [m/s^2]
 
@@ -148,8 +149,8 @@ class ComMpc:
         H = params.alpha * Pzu.T @ Pzu + params.beta * Pdu.T @ Pdu + params.gamma * np.eye(N)
         H = (H + H.T) / 2.0
         Z = np.zeros((N, N))
-        self.hessian = np.block([[H, Z], [Z, H]])  # (2N, 2N)
-        self.constraint = np.block([[Pzu, Z], [Z, Pzu]])  # (2N, 2N)
+        self.hessian = frozen(np.block([[H, Z], [Z, H]]))  # (2N, 2N)
+        self.constraint = frozen(np.block([[Pzu, Z], [Z, Pzu]]))  # (2N, 2N)
         # q = G_ref (Pzs x0 - Zref) + G_dv x0, per axis
         self._q_zmp = params.alpha * Pzu.T  # (N, N)
         self._q_dv = params.beta * Pdu.T @ self.dvel_from_state  # (N, 3)
@@ -201,8 +202,8 @@ class ComMpc:
         """
         assert self.params is not None
         times = self.sample_times(t)
-        ref, lo, hi = plan.zmp_reference_and_bounds(times, self.params.zmp_margin)
-        return self.solve_references(state, t, times, ref, lo, hi)
+        s = plan.sample(times, self.params.zmp_margin)
+        return self.solve_references(state, t, times, s.zmp_ref, s.zmp_lo, s.zmp_hi)
 
     def solve_references(
         self,

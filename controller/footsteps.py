@@ -7,8 +7,8 @@ Paper symbols -> code names:
     l_step -> ``WalkParams.step_length``, w_step -> ``WalkParams.step_width``,
     P^f_{k-1} (prior foot, eq. 21) -> ``FootstepPlan.swing_from[k]``,
     P^f_{k+1} (foothold, eq. 21) -> ``FootstepPlan.swing_to[k]``,
-    Z^ref (eq. 18) -> :meth:`FootstepPlan.zmp_reference`,
-    Z^min / Z^max (eq. 18) -> :meth:`FootstepPlan.zmp_bounds`.
+    Z^ref (eq. 18) -> ``PlanSample.zmp_ref``,
+    Z^min / Z^max (eq. 18) -> ``PlanSample.zmp_lo`` / ``zmp_hi`` (:meth:`FootstepPlan.sample`).
 
 Choices where the paper is vague:
 - Feet start side by side at x = x0, y = +/- step_width / 2, z = 0 (positions are the sole
@@ -31,8 +31,9 @@ Choices where the paper is vague:
   bounding box contains it and is larger only at the corners between the feet. It is the
   simple, per-axis choice the decoupled x / y LIPM QP needs (box bounds per axis); the
   reference itself always lies on the segment between the foot centres, well inside the hull.
-- Times outside [0, t_end] are clamped. All queries are vectorised over ``times``
-  (``np.searchsorted`` on ``step_start``), so the MPC can ask for a whole horizon at once.
+- Times outside [0, t_end] are clamped. The one query, :meth:`FootstepPlan.sample`, is
+  vectorised over ``times`` (``np.searchsorted`` on ``step_start``), so a tick asks for the
+  present, the next tick and the whole MPC horizon at once.
 - :meth:`FootstepPlan.replanned` keeps every step that has started and re-plans the rest with
   new parameters; steps then have their own durations, so the authoritative timing is in the
   per-step arrays ``step_duration``, ``step_dsp`` and ``step_height``; the scalar
@@ -42,7 +43,6 @@ Choices where the paper is vague:
 from __future__ import annotations
 
 import dataclasses
-from bisect import bisect_right
 from dataclasses import dataclass
 from functools import cached_property
 from typing import NamedTuple
@@ -50,28 +50,49 @@ from typing import NamedTuple
 import numpy as np
 
 from controller.params import WalkParams
+from controller.swing import swing_state
+from models.dyros_jet import FOOT_SIZE
 
 LEFT, RIGHT = 0, 1
-FOOT_SIZE = (0.30, 0.17)  # [m] sole length (x) and width (y); models.dyros_jet.FOOT_SIZE
 FINAL_STAND = 1.0  # [s] stand after the ZMP reached the final midpoint
 
+# The per-step table :meth:`FootstepPlan.sample` gathers with one fancy index (one row per
+# step): numpy's per-call overhead dominates on a 16-sample horizon, so one gather of every
+# column beats a gather per array.
+_START, _DSP, _DSP_POS, _SSP, _HEIGHT, _SIDE = range(6)  # [s], [s], [s] (> 0), [s] (> 0), [m]
+_FROM, _TO, _SUPPORT = slice(6, 9), slice(9, 12), slice(12, 15)  # (3,) [m] each
+_ZMP_FROM = slice(15, 17)  # (2,) [m]
 
-class StepPhase(NamedTuple):
-    """Where the plan is at one instant.
 
-    ``index`` is the step (-1 before the first, n after the last). While standing (before the
-    first step or after the last) ``standing`` is True, ``in_dsp`` and ``in_ssp`` are False,
-    ``swing_side`` is -1 and ``support_side`` is the support foot of the nearest step.
-    ``s_ssp`` is the SSP progress in [0, 1] (0 in the DSP and before walking, 1 after).
+class PlanSample(NamedTuple):
+    """The plan at N instants: phase, ZMP reference and bounds (eq. 18), feet (eq. 20-21).
+
+    Every array has N rows, one per queried time. While standing (before the first step or
+    after the last) ``standing`` is True, ``in_dsp`` and ``in_ssp`` are False, ``swing_side``
+    is -1 and ``support_side`` is the support foot of the nearest step.
     """
 
-    index: int
-    in_dsp: bool
-    in_ssp: bool
-    support_side: int
-    swing_side: int
-    s_ssp: float
-    standing: bool
+    t: np.ndarray  # (N,) [s] the times, clamped to [0, t_end]
+    step: np.ndarray  # (N,) int, step in progress: -1 before the first, n after the last
+    standing: np.ndarray  # (N,) bool
+    in_dsp: np.ndarray  # (N,) bool, both feet down inside a step
+    in_ssp: np.ndarray  # (N,) bool, the swing foot in the air
+    swing_side: np.ndarray  # (N,) int, LEFT / RIGHT, -1 while standing
+    support_side: np.ndarray  # (N,) int, LEFT / RIGHT
+    s_ssp: np.ndarray  # (N,) SSP progress in [0, 1] (0 in the DSP and before walking, 1 after)
+    zmp_ref: np.ndarray  # (N, 2) [m] ZMP reference: linear shift in the DSP, foot centre in SSP
+    zmp_lo: np.ndarray  # (N, 2) [m] ZMP box (eq. 18): the feet on the ground less the margin
+    zmp_hi: np.ndarray  # (N, 2) [m]
+    p_left: np.ndarray  # (N, 3) [m] left sole centre (world)
+    v_left: np.ndarray  # (N, 3) [m/s]
+    p_right: np.ndarray  # (N, 3) [m]
+    v_right: np.ndarray  # (N, 3) [m/s]
+
+    @property
+    def on_ground(self) -> np.ndarray:
+        """(N, 2) bool, [left, right] on the ground according to the plan."""
+        in_air = self.in_ssp[:, None] & (self.swing_side[:, None] == np.array([LEFT, RIGHT]))
+        return ~in_air
 
 
 @dataclass(frozen=True)
@@ -89,7 +110,7 @@ class FootstepPlan:
     support_pos: np.ndarray  # (n, 3) [m] the support foot during step k
     t_end: float  # [s] end of the final stand
     n_walking_steps: int  # steps that advance the feet (excludes the closing step)
-    # -- per-step details (added; authoritative when a replan changed the timing) --
+    # -- per-step details (authoritative when a replan changed the timing) --
     step_duration: np.ndarray  # (n,) [s] DSP + SSP of each step
     step_dsp: np.ndarray  # (n,) [s] DSP of each step
     step_height: np.ndarray  # (n,) [m] swing-foot lift of each step
@@ -109,159 +130,98 @@ class FootstepPlan:
         """[s] end of the last (closing) step."""
         return float(self.step_start[-1] + self.step_duration[-1])
 
-    @cached_property
-    def _rows(self) -> _PlanRows:
-        """The per-step arrays as Python lists, for the scalar (one-instant) queries."""
-        return _PlanRows(self)
+    def liftoff_times(self) -> np.ndarray:
+        """(n,) [s] end of each step's DSP (the swing foot leaves the ground)."""
+        return self.step_start + self.step_dsp
 
-    def _locate(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """Clamped times, step index (-1..n), index clipped to 0..n-1, time into that step."""
-        # np.minimum(np.maximum(.)) is np.clip without its Python-level overhead
-        t = np.minimum(np.maximum(np.asarray(times, dtype=float), 0.0), self.t_end)
-        idx = np.searchsorted(self.step_start, t, side="right") - 1
-        idx = np.where(t >= self.walk_end, self.n, idx)
-        k = np.minimum(np.maximum(idx, 0), self.n - 1)
-        return t, idx, k, t - self.step_start[k]
+    def landing_times(self) -> np.ndarray:
+        """(n,) [s] end of each step (the swing foot touches down)."""
+        return self.step_start + self.step_duration
 
-    def _locate_one(self, t: float) -> tuple[float, int, int, float]:
-        """:meth:`_locate` for one instant, in Python scalars (same arithmetic)."""
-        r = self._rows
-        t = min(max(float(t), 0.0), self.t_end)
-        idx = bisect_right(r.start, t) - 1
-        if t >= self.walk_end:
-            idx = r.n
-        k = min(max(idx, 0), r.n - 1)
-        return t, idx, k, t - r.start[k]
-
-    def step_index(self, t: float | np.ndarray) -> int | np.ndarray:
-        """Step in progress at ``t``: -1 before the first step, n after the last."""
-        _, idx, _, _ = self._locate(t)
-        return int(idx) if np.ndim(idx) == 0 else idx
-
-    def phase(self, t: float) -> StepPhase:
-        """The phase of the plan at time ``t`` [s] (see :class:`StepPhase`)."""
-        _, i, k, tau = self._locate_one(t)
-        r = self._rows
-        if i < 0 or i >= r.n:
-            support = 1 - r.swing_side[k]
-            return StepPhase(i, False, False, support, -1, 0.0 if i < 0 else 1.0, True)
-        dsp = r.dsp[k]
-        ssp = r.duration[k] - dsp
-        in_dsp = tau < dsp
-        s = 0.0 if in_dsp else min(max((tau - dsp) / max(ssp, 1e-9), 0.0), 1.0)
-        swing = r.swing_side[k]
-        return StepPhase(i, in_dsp, not in_dsp, 1 - swing, swing, s, False)
-
-    def ssp_progress(self, times: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Vectorised: (step index -1..n, index clipped to 0..n-1, SSP progress in [0, 1]).
-
-        The progress is 0 in the DSP and before walking, 1 after the last step.
-        """
-        _, idx, k, tau = self._locate(times)
-        dsp = self.step_dsp[k]
-        ssp = np.maximum(self.step_duration[k] - dsp, 1e-9)
-        s = np.minimum(np.maximum((tau - dsp) / ssp, 0.0), 1.0)
-        s = np.where(idx < 0, 0.0, np.where(idx >= self.n, 1.0, s))
-        return idx, k, s
-
-    def ssp_progress_one(self, t: float) -> tuple[int, int, float]:
-        """:meth:`ssp_progress` for one instant ``t`` [s], in Python scalars."""
-        _, idx, k, tau = self._locate_one(t)
-        r = self._rows
-        if idx < 0:
-            return idx, k, 0.0
-        if idx >= r.n:
-            return idx, k, 1.0
-        dsp = r.dsp[k]
-        ssp = max(r.duration[k] - dsp, 1e-9)
-        return idx, k, min(max((tau - dsp) / ssp, 0.0), 1.0)
-
-    # -- ZMP ------------------------------------------------------------------------------
-    def zmp_reference(self, times: np.ndarray) -> np.ndarray:
-        """ZMP reference (N, 2) [m] at ``times`` [s]: linear shift in DSP, foot centre in SSP."""
-        if np.ndim(times) == 0:
-            return self.zmp_reference_one(float(times))
-        return self._zmp_reference(self._locate(times))
-
-    def _zmp_reference(self, loc: tuple[np.ndarray, ...]) -> np.ndarray:
-        t, idx, k, tau = loc
-        s = np.minimum(np.maximum(tau / np.maximum(self.step_dsp[k], 1e-9), 0.0), 1.0)[..., None]
-        zmp_from = self.zmp_from[k]
-        out = zmp_from + s * (self.support_pos[k, :2] - zmp_from)
-        if (idx < 0).any():
-            out = np.where((idx < 0)[..., None], self._rows.mid_init, out)
-        if (idx >= self.n).any():
-            last = self.support_pos[-1, :2]
-            s_end = np.clip((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0, 1.0)
-            after = last + s_end[..., None] * (self._rows.mid_final - last)
-            out = np.where((idx >= self.n)[..., None], after, out)
-        return out
-
-    def zmp_reference_one(self, t: float) -> np.ndarray:
-        """:meth:`zmp_reference` at one instant ``t`` [s]: (2,) [m] (same arithmetic)."""
-        t, idx, k, tau = self._locate_one(t)
-        r = self._rows
-        if idx < 0:
-            return r.mid_init.copy()
-        if idx >= r.n:
-            last = self.support_pos[-1, :2]
-            s_end = min(max((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0), 1.0)
-            return last + s_end * (r.mid_final - last)
-        s = min(max(tau / max(r.dsp[k], 1e-9), 0.0), 1.0)
-        (fx, fy), (sx, sy) = r.zmp_from[k], r.support_xy[k]
-        return np.array([fx + s * (sx - fx), fy + s * (sy - fy)])
-
-    def zmp_reference_and_bounds(
-        self, times: np.ndarray, margin: float
-    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """:meth:`zmp_reference` and :meth:`zmp_bounds` at the same ``times`` in one pass.
-
-        Returns:
-            (reference, lo, hi), each (N, 2) [m].
-        """
-        loc = self._locate(times)
-        return (self._zmp_reference(loc), *self._zmp_bounds(loc, margin))
-
-    def _ground_feet_at(self, loc: tuple[np.ndarray, ...]) -> tuple[np.ndarray, np.ndarray]:
-        _, idx, k, tau = loc
-        in_ssp = tau >= self.step_dsp[k]
-        a = self.support_pos[k, :2]
-        b = np.where(in_ssp[..., None], a, self.swing_from[k, :2])
-        before, after = idx < 0, idx >= self.n
-        if before.any() or after.any():
-            before, after = before[..., None], after[..., None]
-            init, final = self.feet_init[:, :2], self.feet_final[:, :2]
-            a = np.where(before, init[LEFT], np.where(after, final[LEFT], a))
-            b = np.where(before, init[RIGHT], np.where(after, final[RIGHT], b))
-        return a, b
-
-    def zmp_bounds(self, times: np.ndarray, margin: float) -> tuple[np.ndarray, np.ndarray]:
-        """ZMP box (lo (N, 2), hi (N, 2)) [m]: support foot in SSP, both feet's box otherwise.
-
-        Args:
-            times: (N,) [s] query times.
-            margin: [m] distance kept from the foot edges.
-        """
-        return self._zmp_bounds(self._locate(times), margin)
-
-    def _zmp_bounds(
-        self, loc: tuple[np.ndarray, ...], margin: float
-    ) -> tuple[np.ndarray, np.ndarray]:
-        a, b = self._ground_feet_at(loc)
-        half = np.maximum(np.array(FOOT_SIZE) / 2.0 - margin, 0.0)
-        return np.minimum(a, b) - half, np.maximum(a, b) + half
-
-    def feet_on_ground(self, times: np.ndarray) -> np.ndarray:
-        """(N, 2) bool, [left, right] on the ground according to the plan."""
-        _, idx, k, tau = self._locate(times)
-        walking = (idx >= 0) & (idx < self.n)
-        in_air = walking & (tau >= self.step_dsp[k])
-        side = self.swing_side[k]
-        return np.stack([~(in_air & (side == LEFT)), ~(in_air & (side == RIGHT))], axis=-1)
+    def step_length(self, k: int) -> float:
+        """[m] forward length of step ``k`` (clipped to the walking steps), 0 without any."""
+        if self.n_walking_steps <= 0:
+            return 0.0
+        k = min(max(int(k), 0), self.n_walking_steps - 1)
+        return float(self.swing_to[k, 0] - self.support_pos[k, 0])
 
     def footholds(self) -> np.ndarray:
         """(n + 2, 3) [m] every planned foot position in order: left, right initial, landings."""
         return np.vstack([self.feet_init, self.swing_to])
+
+    # -- the sampler ----------------------------------------------------------------------
+    @cached_property
+    def _table(self) -> np.ndarray:
+        """(n, 17) per-step columns read by :meth:`sample` (see the ``_START`` .. constants)."""
+        dsp = self.step_dsp
+        return np.column_stack([
+            self.step_start, dsp, np.maximum(dsp, 1e-9),
+            np.maximum(self.step_duration - dsp, 1e-9), self.step_height,
+            self.swing_side.astype(float), self.swing_from, self.swing_to, self.support_pos,
+            self.zmp_from[:, :2],
+        ])
+
+    def sample(self, times: float | np.ndarray, margin: float = 0.0) -> PlanSample:
+        """The plan at ``times`` [s] (scalar or (N,)): phase, ZMP reference and box, feet.
+
+        The one query of the plan: the control tick (horizon, foot targets, phase), the
+        displays and the metrics all read it. Times outside [0, t_end] are clamped.
+
+        Args:
+            times: [s] query times.
+            margin: [m] distance the ZMP box keeps from the foot edges (eq. 18 bounds).
+        """
+        t = np.minimum(np.maximum(np.atleast_1d(np.asarray(times, dtype=float)), 0.0), self.t_end)
+        idx = np.searchsorted(self.step_start, t, side="right") - 1
+        after = t >= self.walk_end
+        idx[after] = self.n
+        before = idx < 0
+        k = np.minimum(np.maximum(idx, 0), self.n - 1)
+        rows = self._table[k]  # (N, 17)
+        dsp, ssp, side = rows[:, _DSP], rows[:, _SSP], rows[:, _SIDE]
+        support = rows[:, _SUPPORT]
+        tau = t - rows[:, _START]  # [s] into the step
+        standing = before | after
+        outside = bool(standing.any())
+        walking = ~standing
+        in_ssp = walking & (tau >= dsp)
+        # eq. (20)-(21): the support foot stays, the swing foot follows the curve of swing.py
+        s = np.minimum(np.maximum((tau - dsp) / ssp, 0.0), 1.0)
+        if outside:
+            s = np.where(before, 0.0, np.where(after, 1.0, s))
+        p_sw, v_sw = swing_state(s, rows[:, _FROM], rows[:, _TO], rows[:, _HEIGHT], ssp)
+        left_swings = (walking & (side == LEFT))[:, None]
+        right_swings = (walking & (side == RIGHT))[:, None]
+        p_left = np.where(left_swings, p_sw, support)
+        p_right = np.where(right_swings, p_sw, support)
+        v_left = np.where(left_swings, v_sw, 0.0)
+        v_right = np.where(right_swings, v_sw, 0.0)
+        # ZMP reference: from the previous support to this one in the DSP, then on it (eq. 18)
+        zmp_from = rows[:, _ZMP_FROM]
+        s_dsp = np.minimum(np.maximum(tau / rows[:, _DSP_POS], 0.0), 1.0)[:, None]
+        ref = zmp_from + s_dsp * (support[:, :2] - zmp_from)
+        if outside:
+            b1, a1 = before[:, None], after[:, None]
+            init, final = self.feet_init, self.feet_final
+            p_left = np.where(b1, init[LEFT], np.where(a1, final[LEFT], p_left))
+            p_right = np.where(b1, init[RIGHT], np.where(a1, final[RIGHT], p_right))
+            ref = np.where(b1, init[:, :2].mean(axis=0), ref)
+            if after.any():  # after the closing step: on to the feet's midpoint, then stay
+                last = self.support_pos[-1, :2]
+                s_end = np.clip((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0, 1.0)
+                ref = np.where(a1, last + s_end[:, None] * (final[:, :2].mean(axis=0) - last), ref)
+        # ZMP box: both feet's bounding box, or the support foot alone in the SSP
+        ssp_col = in_ssp[:, None]
+        a = np.where(ssp_col, support[:, :2], p_left[:, :2])
+        b = np.where(ssp_col, support[:, :2], p_right[:, :2])
+        half = np.maximum(np.array(FOOT_SIZE) / 2.0 - margin, 0.0)
+        side_i = side.astype(np.intp)
+        return PlanSample(
+            t=t, step=idx, standing=standing, in_dsp=walking & ~in_ssp, in_ssp=in_ssp,
+            swing_side=np.where(walking, side_i, -1), support_side=1 - side_i, s_ssp=s,
+            zmp_ref=ref, zmp_lo=np.minimum(a, b) - half, zmp_hi=np.maximum(a, b) + half,
+            p_left=p_left, v_left=v_left, p_right=p_right, v_right=v_right,
+        )
 
     # -- replanning -----------------------------------------------------------------------
     def replanned(self, walk: WalkParams, t_now: float) -> FootstepPlan:
@@ -293,40 +253,6 @@ class FootstepPlan:
             feet[int(self.swing_side[j])] = self.swing_to[j]
         n_walk = max(walk.n_steps, started)
         return _finish(walk, self.t_start, self.feet_init, steps, feet, n_walk - started)
-
-
-class _PlanRows:
-    """A plan's per-step arrays as Python lists (scalar queries avoid numpy's call overhead)."""
-
-    def __init__(self, plan: FootstepPlan):
-        self.n = plan.n
-        self.start = plan.step_start.tolist()
-        self.duration = plan.step_duration.tolist()
-        self.dsp = plan.step_dsp.tolist()
-        self.height = plan.step_height.tolist()
-        self.swing_side = [int(v) for v in plan.swing_side]
-        self.swing_from = plan.swing_from.tolist()
-        self.swing_to = plan.swing_to.tolist()
-        self.support_pos = plan.support_pos.tolist()
-        self.support_xy = plan.support_pos[:, :2].tolist()
-        self.zmp_from = plan.zmp_from[:, :2].tolist()
-        self.feet_init = plan.feet_init.tolist()
-        self.feet_final = plan.feet_final.tolist()
-        self.mid_init = plan.feet_init[:, :2].mean(axis=0)  # (2,) [m]
-        self.mid_final = plan.feet_final[:, :2].mean(axis=0)
-        # One row per step with what a horizon query reads (one gather instead of many);
-        # the derived columns are the same arithmetic the queries did per sample.
-        dsp, sup = plan.step_dsp, plan.support_pos[:, :2]
-        frm, to, zf = plan.swing_from[:, :2], plan.swing_to[:, :2], plan.zmp_from[:, :2]
-        self.table = np.column_stack([
-            dsp,  # 0: DSP [s]
-            np.maximum(plan.step_duration - dsp, 1e-9),  # 1: SSP [s]
-            np.maximum(dsp, 1e-9),  # 2: DSP, > 0 [s]
-            sup, frm, to, zf,  # 3-4 support, 5-6 swing from, 7-8 swing to, 9-10 ZMP from
-            to - frm,  # 11-12
-            sup - zf,  # 13-14
-            plan.swing_side == LEFT,  # 15: 1.0 if the left foot swings
-        ])
 
 
 class _Steps:

@@ -46,14 +46,14 @@ import math
 import numpy as np
 
 from controller.params import IkParams
-from controller.qp import QP, QpSolver
+from controller.qp import QP, QpSolver, frozen
 
 WAIST = 0  # index of the waist yaw in q_low (13,)
 N_LOW = 13
 METHODS = ("fixed", "redundancy", "mpc")
-# The bound rows' matrix, one shared object so the QP solver never re-factors it (see
-# controller.qp: matrices are tracked by identity). Never modify it.
-BOUND_ROWS = np.eye(N_LOW)
+# The bound rows' matrix, one shared read-only object: the QP solver never re-factors it
+# (controller.qp tracks frozen matrices by identity).
+BOUND_ROWS = frozen(np.eye(N_LOW))
 
 
 def velocity_bounds(

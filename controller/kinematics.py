@@ -44,6 +44,9 @@ from models.dyros_jet import (
 
 _ANKLE_JOINTS = ("L_ankle_roll", "R_ankle_roll")  # joint origin = ankle point
 _EPS = float(np.finfo(float).eps)
+# kappa(J) of an exactly singular Jacobian is infinite; series, summaries and JSON record it as
+# this finite cap (far above any kappa of a bent leg: ~100 at 0.1 rad from straight).
+KAPPA_CAP = 1e8
 _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY_WXYZ = (1.0, 0.0, 0.0, 0.0)
 
@@ -177,9 +180,26 @@ class RobotKinematics:
 def condition_number(J: np.ndarray) -> float:
     """kappa(J) = sigma_max / sigma_min by SVD (eq. 45); inf if J is (numerically) singular."""
     s = np.linalg.svd(np.asarray(J, dtype=float), compute_uv=False)
-    if s.size == 0 or s[0] == 0.0 or s[-1] <= s[0] * _EPS:
+    return float("inf") if s.size == 0 else _kappa(s[0], s[-1])
+
+
+def jacobian_conditions(J_low: np.ndarray) -> tuple[float, float]:
+    """kappa (eq. 45) of J_low (12 x 13) and of its 12 leg columns, each inf when singular.
+
+    Without the waist column J_low is block diagonal (each foot's rows depend on its own leg
+    only), so the legs' singular values are those of the two 6 x 6 blocks: one batched SVD.
+    """
+    J = np.asarray(J_low, dtype=float)
+    s_low = np.linalg.svd(J, compute_uv=False)
+    blocks = np.stack((J[:6, 1:7], J[6:, 7:13]))  # left foot / left leg, right / right
+    s_legs = np.linalg.svd(blocks, compute_uv=False)  # (2, 6), each descending
+    return _kappa(s_low[0], s_low[-1]), _kappa(s_legs[:, 0].max(), s_legs[:, -1].min())
+
+
+def _kappa(s_max: float, s_min: float) -> float:
+    if s_max == 0.0 or s_min <= s_max * _EPS:
         return float("inf")
-    return float(s[0] / s[-1])
+    return float(s_max / s_min)
 
 
 def leg_reach(kin: KinState) -> np.ndarray:

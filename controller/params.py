@@ -23,6 +23,33 @@ from typing import Any, Literal
 
 Method = Literal["fixed", "redundancy", "mpc"]
 METHODS: tuple[str, ...] = ("fixed", "redundancy", "mpc")
+CONTROL_DT = 0.005  # [s] the paper's 200 Hz control period (every layer, every QP)
+
+
+@dataclass(frozen=True)
+class MethodInfo:
+    """How a walking method is named and drawn everywhere (scene, plots, report, page)."""
+
+    name: str  # the ``method`` value
+    title: str  # short, for labels and legends
+    label: str  # long, as the paper names it
+    color: tuple[int, int, int]  # RGB; no other overlay of the scene uses these hues
+
+
+# Okabe-Ito colours (distinguishable with the common colour-vision deficiencies).
+METHOD_INFO: dict[str, MethodInfo] = {
+    "fixed": MethodInfo("fixed", "fixed pelvis", "fixed pelvis (W/O rotation)", (0, 114, 178)),
+    "redundancy": MethodInfo(
+        "redundancy", "redundancy", "rotation by redundancy [21]", (230, 159, 0)
+    ),
+    "mpc": MethodInfo("mpc", "pelvic MPC", "rotation by MPC (proposed)", (0, 158, 115)),
+}
+
+
+def method_hex(method: str) -> str:
+    """``#rrggbb`` of a method's colour (matplotlib, HTML)."""
+    r, g, b = METHOD_INFO[method].color
+    return f"#{r:02x}{g:02x}{b:02x}"
 
 
 def _f(default: float, lo: float, hi: float, step: float, unit: str, label: str, **kw: Any) -> Any:
@@ -99,7 +126,7 @@ class ControllerParams:
     pelvis: PelvisMpcParams = field(default_factory=PelvisMpcParams)
     ik: IkParams = field(default_factory=IkParams)
     arms: ArmParams = field(default_factory=ArmParams)
-    control_dt: float = 0.005  # [s] 200 Hz, fixed by the paper
+    control_dt: float = CONTROL_DT  # [s] 200 Hz, fixed by the paper
 
     def validated(self) -> ControllerParams:
         """Return self after checking every field against its range; raise ValueError."""

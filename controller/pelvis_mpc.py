@@ -54,7 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.params import PelvisMpcParams
-from controller.qp import QP, QpSolver
+from controller.qp import QP, QpSolver, frozen
 
 
 @dataclass(frozen=True)
@@ -120,9 +120,9 @@ class PelvisMpc:
         self._M = np.linalg.inv(self._PB_ang)  # (N, N): U = M (Theta - f)
         a, b = params.alpha, params.beta
         self._MtM = self._M.T @ self._M
-        self._P = a * np.eye(n) + b * self._MtM  # (N, N)
+        self._P = frozen(a * np.eye(n) + b * self._MtM)  # (N, N)
         self._acc_scale = 0.5 * T * T  # s: makes the acceleration rows O(1)
-        self._Acon = np.vstack([np.eye(n), self._acc_scale * self._M])  # (2N, N)
+        self._Acon = frozen(np.vstack([np.eye(n), self._acc_scale * self._M]))  # (2N, N)
         self._angle_limit = math.radians(params.angle_limit_deg)
         # Constant parts of the per-tick vectors (same arithmetic as written out in build).
         self._bMtM = b * self._MtM  # (N, N)

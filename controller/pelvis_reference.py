@@ -8,15 +8,21 @@ Paper symbols -> code names:
     P_hat_P,i(k) (eq. 27, x and y)      -> ``p_pelvis[k]``   (N, 2) [m]
     P_LF,i(k), P_RF,i(k)                -> ``p_left[k]``, ``p_right[k]`` (N, 2) [m]
     Delta d_LFP,i,x(k), Delta d_RFP,i,x(k) (eq. 28-29) -> ``dx_left``, ``dx_right`` (N,) [m]
-    Delta d_LFP,i,y, Delta d_RFP,i,y (eq. 31-32)       -> ``+half_width``, ``-half_width`` [m]
+    Delta d_LFP,i,y, Delta d_RFP,i,y (eq. 31-32)       -> :func:`lateral_distances` (N, 2) [m]
     k_pel                               -> ``k_pel``
     theta_pel^ref(k) (eq. 30, 33)       -> the returned array (N,) [rad]
 
 Choices where the paper is vague (SPEC sections 1 and 6):
-- **Lateral distance**: eq. (31)-(32) give the y distance no index k; we use the *nominal*
-  pelvis-to-foot lateral distance, ``+half_width`` for the left foot and ``-half_width`` for
-  the right (half the step width). Using the predicted lateral distance would divide by the
-  few centimetres left when the CoM sways over the support foot and let that foot dominate.
+- **Lateral distance** (``PelvisMpcParams.lateral_distance``): eq. (31)-(32) write
+  Delta d_{FP,i,y} with the time index i and no k. Three readings:
+  ``current`` (the paper's, read literally): the pelvis-to-foot lateral distance at tick i,
+  from the CoM estimate and the feet now, held over the horizon; ``predicted``: per horizon
+  sample k, from the predicted CoM and the planned feet; ``nominal``: half the step width,
+  constant. ``current`` and ``predicted`` keep each distance at least ``lateral_floor`` from
+  zero (sign kept: left foot +, right foot -): when the CoM sways over a support foot its
+  distance to that foot shrinks to a few centimetres, and atan(k_pel dx / dy) would let that
+  foot's small dx swing the angle. ``nominal`` makes the reference stationary when the pelvis
+  is midway between the feet, so the pelvis barely turns in the DSP (SPEC.md section 2.6).
 - **Sign**: a positive yaw (about +z) moves the left hip (at +y) backward. The pelvis must turn
   each hip *toward its own foot* (the forward foot's hip moves forward, so the forward leg's
   hip-to-foot distance shrinks), hence ``theta_ref = -mean(atan(k_pel dx / dy))``. The literal
@@ -29,6 +35,43 @@ from __future__ import annotations
 import numpy as np
 
 HIP_HALF_WIDTH = 0.105  # [m] lateral distance from the pelvis centre to each hip joint
+LATERAL_MODES = ("current", "nominal", "predicted")
+
+
+def lateral_distances(
+    mode: str,
+    p_pelvis: np.ndarray,
+    p_left: np.ndarray,
+    p_right: np.ndarray,
+    p_pelvis_now: np.ndarray,
+    p_left_now: np.ndarray,
+    p_right_now: np.ndarray,
+    half_width: float,
+    floor: float,
+) -> np.ndarray:
+    """Delta d_{LFP,y}, Delta d_{RFP,y} of eq. (31)-(32) for each horizon sample, (N, 2) [m].
+
+    Args:
+        mode: ``"current"``, ``"predicted"`` or ``"nominal"`` (module docstring).
+        p_pelvis, p_left, p_right: (N, 2) predicted pelvis (= CoM) and planned feet [m].
+        p_pelvis_now, p_left_now, p_right_now: (2,) the CoM estimate and the feet now [m].
+        half_width: half the step width [m] (the nominal distance).
+        floor: [m] smallest |distance| (``current`` and ``predicted``).
+    """
+    n = np.atleast_2d(p_pelvis).shape[0]
+    if mode == "nominal":
+        dy = np.array([half_width, -half_width])
+    elif mode == "current":
+        dy = np.array([p_left_now[1] - p_pelvis_now[1], p_right_now[1] - p_pelvis_now[1]])
+    elif mode == "predicted":
+        p_pelvis = np.atleast_2d(p_pelvis)
+        dy = np.column_stack([np.atleast_2d(p_left)[:, 1] - p_pelvis[:, 1],
+                              np.atleast_2d(p_right)[:, 1] - p_pelvis[:, 1]])
+    else:
+        raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
+    if mode != "nominal":  # the left foot lies at +y of the pelvis, the right at -y
+        dy = np.stack([np.maximum(dy[..., 0], floor), np.minimum(dy[..., 1], -floor)], axis=-1)
+    return np.broadcast_to(dy, (n, 2))
 
 
 def reference_pelvic_angles(
@@ -36,7 +79,7 @@ def reference_pelvic_angles(
     p_left: np.ndarray,
     p_right: np.ndarray,
     k_pel: float,
-    half_width: float,
+    lateral: np.ndarray,
 ) -> np.ndarray:
     """Reference pelvic yaw for each predicted sample, eq. (28)-(33).
 
@@ -45,20 +88,22 @@ def reference_pelvic_angles(
         p_left: (N, 2) planned left-foot x, y positions at the same instants [m].
         p_right: (N, 2) planned right-foot x, y positions [m].
         k_pel: gain of eq. (31)-(32) (share of the step made by the pelvic rotation).
-        half_width: nominal pelvis-to-foot lateral distance, half the step width [m] (> 0).
+        lateral: (N, 2) pelvis-to-foot lateral distances [left (> 0), right (< 0)] [m]
+            (:func:`lateral_distances`).
 
     Returns:
         (N,) reference pelvic angles theta_ref(k) [rad], positive about +z.
     """
-    if half_width <= 0.0:
-        raise ValueError(f"half_width must be positive, got {half_width}")
+    lateral = np.asarray(lateral, dtype=float)
+    if np.any(lateral[:, 0] <= 0.0) or np.any(lateral[:, 1] >= 0.0):
+        raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
     p_pelvis = np.atleast_2d(np.asarray(p_pelvis, dtype=float))
     p_left = np.atleast_2d(np.asarray(p_left, dtype=float))
     p_right = np.atleast_2d(np.asarray(p_right, dtype=float))
     dx_left = p_left[:, 0] - p_pelvis[:, 0]  # eq. (28) [m]
     dx_right = p_right[:, 0] - p_pelvis[:, 0]  # eq. (29) [m]
-    theta_left = np.arctan(k_pel * dx_left / half_width)  # eq. (31), dy = +half_width
-    theta_right = np.arctan(k_pel * dx_right / -half_width)  # eq. (32), dy = -half_width
+    theta_left = np.arctan(k_pel * dx_left / lateral[:, 0])  # eq. (31)
+    theta_right = np.arctan(k_pel * dx_right / lateral[:, 1])  # eq. (32)
     return -0.5 * (theta_left + theta_right)  # eq. (30) with the sign rule of SPEC section 1
 
 

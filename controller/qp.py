@@ -15,9 +15,11 @@ Two back-ends:
   vectors are updated and the last active set is the warm start; P or A are refactored only
   when the layer hands over a different matrix.
 
-Matrices are tracked by *identity*: a layer that keeps P or A constant passes the same array
-object every tick (built once per parameter change) and the solver never re-factors it; a
-layer that changes them builds a new array. Never modify a QP's matrices in place.
+Constant matrices are tracked by *identity*, and only read-only ones: a layer that keeps P or
+A constant freezes it once per parameter change (:func:`frozen`) and passes the same array
+every tick, and the solver never re-factors it; any writable matrix is taken as new at every
+solve. Modifying a frozen matrix in place raises (numpy refuses), so the identity shortcut
+cannot go stale.
 
 A failed solve never raises: :meth:`QpSolver.solve` returns ``ok=False`` and the caller falls
 back (holds its last command) and counts the failure.
@@ -34,6 +36,23 @@ import osqp
 import scipy.sparse as sp
 
 INF = 1e20  # OSQP's infinity; DAQP takes the same large bound
+
+
+def frozen(a: np.ndarray) -> np.ndarray:
+    """``a`` made read-only (in place) and returned: a constant QP matrix (module docstring)."""
+    a.setflags(write=False)
+    return a
+
+
+def _same(new: np.ndarray, old: np.ndarray | None) -> bool:
+    """True if ``new`` is the read-only matrix the solver already has."""
+    return new is old and not new.flags.writeable
+
+
+def _buffer(a: np.ndarray) -> np.ndarray:
+    """A C-contiguous writable float array (DAQP's buffers must be writable; copies frozen
+    matrices, which it only receives when they change)."""
+    return np.require(a, dtype=float, requirements=("C", "W"))
 
 
 class QP(NamedTuple):
@@ -106,10 +125,10 @@ class QpSolver:
             assert self._solver is not None
         else:
             kw: dict[str, np.ndarray] = {}
-            if qp.P is not self._P_obj:
+            if not _same(qp.P, self._P_obj):
                 kw["Px"] = self._P_pattern.values(qp.P)
                 self._P_obj = qp.P
-            if qp.A is not self._A_obj:
+            if not _same(qp.A, self._A_obj):
                 kw["Ax"] = self._A_pattern.values(qp.A)
                 self._A_obj = qp.A
             self._solver.update(
@@ -132,8 +151,8 @@ class QpSolver:
         if model is None or self._shape != A.shape:
             model = daqp.Model()
             flag, _ = model.setup(
-                np.ascontiguousarray(P, dtype=float), np.ascontiguousarray(q, dtype=float),
-                np.ascontiguousarray(A, dtype=float), bu, bl, eq.astype(np.intc) * 5,
+                _buffer(P), np.ascontiguousarray(q, dtype=float), _buffer(A), bu, bl,
+                eq.astype(np.intc) * 5,
             )
             if flag < 0:
                 return None, f"daqp setup flag {flag}"
@@ -141,11 +160,11 @@ class QpSolver:
             self._P_obj, self._A_obj, self._eq_key = P, A, eq_key
         else:
             kw: dict[str, np.ndarray] = {}
-            if P is not self._P_obj:
-                kw["H"] = P
+            if not _same(P, self._P_obj):
+                kw["H"] = _buffer(P)
                 self._P_obj = P
-            if A is not self._A_obj:
-                kw["A"] = A
+            if not _same(A, self._A_obj):
+                kw["A"] = _buffer(A)
                 self._A_obj = A
             if eq_key != self._eq_key:  # else keep the working set: the warm start
                 kw["sense"] = eq.astype(np.intc) * 5
@@ -164,8 +183,8 @@ class QpSolver:
             # Finite data: a sum is finite iff every term is (barring overflow near 1e308).
             # P and A already checked (the same objects as last time) are not summed again.
             finite = math.isfinite(qp.q.sum()) and (
-                qp.P is self._P_obj or math.isfinite(qp.P.sum())
-            ) and (qp.A is self._A_obj or math.isfinite(qp.A.sum()))
+                _same(qp.P, self._P_obj) or math.isfinite(qp.P.sum())
+            ) and (_same(qp.A, self._A_obj) or math.isfinite(qp.A.sum()))
             if not finite or (qp.l > qp.u + 1e-9).any():
                 x, status = None, "infeasible bounds or non-finite data"
             elif self.backend == "osqp":

@@ -41,16 +41,16 @@ import numpy as np
 
 from controller.arm_swing import build_arm_qp, solve_arm
 from controller.com_mpc import ComMpc, ComPlan
-from controller.footsteps import LEFT, RIGHT, FootstepPlan, plan_footsteps
+from controller.footsteps import LEFT, RIGHT, FootstepPlan, PlanSample, plan_footsteps
 from controller.ik import build_ik, foot_velocity_command, solve_ik
-from controller.kinematics import KinState, RobotKinematics, condition_number, leg_reach
+from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
 from controller.params import ControllerParams, horizon_samples
 from controller.pelvis_mpc import PelvisMpc, PelvisPlan
-from controller.pelvis_reference import reference_pelvic_angles
+from controller.pelvis_reference import lateral_distances, reference_pelvic_angles
 from controller.qp import QpSolver
-from controller.swing import FootTrajectory, foot_trajectories, horizon_queries
 
 LAYERS = ("kinematics", "com_mpc", "pelvis_mpc", "ik", "arm_swing")
+LATERAL_MODE, LATERAL_FLOOR = "nominal", 0.03  # TODO(issue 13): from PelvisMpcParams
 
 
 @dataclass(frozen=True)
@@ -62,6 +62,8 @@ class TickOutput:
     q_dot: np.ndarray  # (n_joints,) commanded joint velocities [rad/s]
     com_plan: ComPlan  # predicted CoM over the horizon (eq. 25-26)
     theta_ref: np.ndarray  # (N,) reference pelvic angle over the horizon (eq. 33) [rad]
+    lateral: np.ndarray  # (N, 2) lateral distances of eq. (31)-(32) [m] (left > 0, right < 0)
+    plan_sample: PlanSample  # the plan at t, t + dt and the N horizon samples
     pelvis_plan: PelvisPlan | None  # MPC's optimised pelvic angles (method mpc) or None
     p_world_pelvis_des: np.ndarray  # (3,) desired pelvis position (eq. 19) [m]
     p_world_com_des: np.ndarray  # (2,) desired CoM x, y [m]
@@ -73,6 +75,8 @@ class TickOutput:
     h_low: float  # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
     h_up: float  # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
     kappa: float  # condition number of J for the joints the method moves (eq. 45)
+    kappa_low: float  # kappa of J_low (12 x 13, eq. 9), the same matrix for every method
+    kappa_legs: float  # kappa of J_low's 12 leg columns (without the waist), every method
     reach: np.ndarray  # (2,) hip-to-ankle distance / leg length, left and right
     step_index: int  # current step (-1 before the first, n after the last)
     in_ssp: bool
@@ -136,8 +140,6 @@ class Walker:
         self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
         self._pending: ControllerParams | None = None
         self._com_des_prev: np.ndarray | None = None
-        # (plan, t, feet): the planned feet at the next tick's time, reused by that tick
-        self._feet_next: tuple[FootstepPlan, float, FootTrajectory] | None = None
 
     # -- parameters --------------------------------------------------------------------------
     def set_params(self, params: ControllerParams) -> None:
@@ -187,15 +189,17 @@ class Walker:
             return now
 
         t0 = clock() if clock else 0.0
-        phase = self.plan.phase(t)
-
-        # 2-3. CoM MPC (eq. 10-18); predicted CoM over the horizon (eq. 25-26). The plan is
-        # queried once over the horizon: ZMP reference and bounds here, feet for step 6.
+        # 1-2. The plan, sampled once per tick: now (phase, anchoring), the next tick (foot
+        # targets) and the CoM MPC's N samples (ZMP reference and bounds, feet for step 6).
         com_mpc = self.com_mpc
-        times = com_mpc.sample_times(t)
-        horizon = horizon_queries(self.plan, times, p.com.zmp_margin)
+        times = com_mpc.sample_times(t)  # (N,) t + k T_p
+        plan = self.plan.sample(np.concatenate(((t, t + dt), times)), p.com.zmp_margin)
+        in_dsp, standing = bool(plan.in_dsp[0]), bool(plan.standing[0])
+        h = slice(2, None)  # the horizon's rows
+
+        # 3. CoM MPC (eq. 10-18); predicted CoM over the horizon (eq. 25-26).
         com_plan = com_mpc.solve_references(
-            self.com_state, t, times, horizon.zmp_ref, horizon.zmp_lo, horizon.zmp_hi
+            self.com_state, t, times, plan.zmp_ref[h], plan.zmp_lo[h], plan.zmp_hi[h]
         )
         if not com_plan.ok:
             failures["com_mpc"] = True
@@ -203,12 +207,11 @@ class Walker:
         p_world_com_des = self.com_state[0].copy()
         t0 = lap("com_mpc", t0)
 
-        # 4. Pelvis position (eq. 19): measured CoM with the support sole at its foothold.
-        side = phase.support_side
-        sole = self.plan.support_pos[min(max(phase.index, 0), len(self.plan.support_pos) - 1)]
-        if phase.standing or phase.in_dsp:
-            sole = None  # both feet down: anchor on both and average
-        p_world_com_meas = self._measured_com(q_meas, side, sole, t)
+        # 4. Pelvis position (eq. 19): measured CoM with the support sole at its planned place
+        # (both soles, averaged, while both feet are down).
+        feet_now = (plan.p_left[0], plan.p_right[0])
+        support = None if (standing or in_dsp) else int(plan.support_side[0])
+        p_world_com_meas = self._measured_com(q_meas, feet_now, support)
         t0 = lap("kinematics", t0)
         p_prev = self.p_world_pelvis_des.copy()
         self.p_world_pelvis_des[:2] += (
@@ -218,14 +221,14 @@ class Walker:
         self.p_world_pelvis_des[2] = self.pelvis_height
         v_world_pelvis = (self.p_world_pelvis_des - p_prev) / dt
 
-        # 5. Foot trajectories (eq. 20-21) at the next tick (over the horizon: see 2-3).
-        feet_now = foot_trajectories(self.plan, t + dt)  # (3,) per foot
-        self._feet_next = (self.plan, t + dt, feet_now)
-
         # 6. Reference pelvic angle over the horizon (eq. 27-33).
+        lateral = lateral_distances(
+            LATERAL_MODE, com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2],
+            p_world_com_meas[:2], plan.p_left[0, :2], plan.p_right[0, :2],
+            p.walk.step_width / 2, LATERAL_FLOOR,
+        )
         theta_ref = reference_pelvic_angles(
-            com_plan.com, horizon.p_left_xy, horizon.p_right_xy,
-            p.pelvis.k_pel, p.walk.step_width / 2,
+            com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2], p.pelvis.k_pel, lateral
         )
 
         # 7. Pelvic-rotation MPC (eq. 34-38).
@@ -243,12 +246,13 @@ class Walker:
         # 8. QP inverse kinematics (eq. 39-40) on the commanded state.
         ks: KinState = self.kin.compute(self.q_cmd)
         t0 = lap("kinematics", t0)
-        p_des_l = feet_now.p_left - self.p_world_pelvis_des
-        p_des_r = feet_now.p_right - self.p_world_pelvis_des
+        # foot targets at the next tick (row 1 of the sample), relative to the pelvis
+        p_des_l = plan.p_left[1] - self.p_world_pelvis_des
+        p_des_r = plan.p_right[1] - self.p_world_pelvis_des
         v_ff_l = np.zeros(6)  # [linear; angular]: the feet do not turn
-        v_ff_l[:3] = feet_now.v_left - v_world_pelvis
+        v_ff_l[:3] = plan.v_left[1] - v_world_pelvis
         v_ff_r = np.zeros(6)
-        v_ff_r[:3] = feet_now.v_right - v_world_pelvis
+        v_ff_r[:3] = plan.v_right[1] - v_world_pelvis
         v_des = foot_velocity_command(
             ks.T_pelvis_left_sole, _pose(p_des_l), v_ff_l,
             ks.T_pelvis_right_sole, _pose(p_des_r), v_ff_r, p.ik.foot_gain,
@@ -290,8 +294,8 @@ class Walker:
         for name, failed in failures.items():
             self.failure_counts[name] += int(failed)
 
-        cols = slice(1, 13) if p.method == "fixed" else slice(0, 13)
-        kappa = condition_number(ks.J_low[:, cols])
+        kappa_low, kappa_legs = jacobian_conditions(ks.J_low)
+        kappa = kappa_legs if p.method == "fixed" else kappa_low
         self.t = t + dt
         return TickOutput(
             t=t,
@@ -299,21 +303,25 @@ class Walker:
             q_dot=q_dot,
             com_plan=com_plan,
             theta_ref=theta_ref,
+            lateral=lateral,
+            plan_sample=plan,
             pelvis_plan=pelvis_plan,
             p_world_pelvis_des=self.p_world_pelvis_des.copy(),
             p_world_com_des=p_world_com_des,
             p_world_com_meas=p_world_com_meas,
-            p_world_feet_des=np.array([feet_now.p_left, feet_now.p_right]),
-            zmp_ref=self.plan.zmp_reference_one(t),
+            p_world_feet_des=np.array([plan.p_left[1], plan.p_right[1]]),
+            zmp_ref=plan.zmp_ref[0].copy(),
             waist_angle=float(self.q_cmd[lower[0]]),
             waist_rate=self._last_waist_rate,
             h_low=float(ks.cmm_yaw_low @ q_dot_low),
             h_up=float(ks.cmm_yaw_up @ q_dot_up),
             kappa=kappa,
+            kappa_low=kappa_low,
+            kappa_legs=kappa_legs,
             reach=leg_reach(ks),
-            step_index=phase.index,
-            in_ssp=bool(phase.in_ssp),
-            swing_side=int(phase.swing_side),
+            step_index=int(plan.step[0]),
+            in_ssp=bool(plan.in_ssp[0]),
+            swing_side=int(plan.swing_side[0]),
             failures=failures,
             speed_limited=speed_limited,
             layer_s=timings,
@@ -327,25 +335,21 @@ class Walker:
         return now if prev is None else prev
 
     def _measured_com(
-        self, q_meas: np.ndarray, side: int, sole: np.ndarray | None, t: float
+        self, q_meas: np.ndarray, feet: tuple[np.ndarray, np.ndarray], support: int | None
     ) -> np.ndarray:
-        """CoM from the measured joints, the base placed so the support sole is on its foothold.
+        """CoM from the measured joints, the base placed so the support sole is where planned.
 
-        In double support (``sole`` None) the two anchored estimates are averaged. One
-        kinematics pass gives the CoM and both soles relative to the base; the base placed by
-        the support sole is then ``sole - p_pelvis_sole`` (same as
-        :meth:`RobotKinematics.support_anchored_base` + :meth:`RobotKinematics.com_world`).
+        ``feet`` are the planned left and right soles now; with ``support`` None (both feet
+        down) the two anchored estimates are averaged. One kinematics pass gives the CoM and
+        both soles relative to the base; the base placed by a sole is ``sole - p_pelvis_sole``
+        (what :meth:`RobotKinematics.support_anchored_base` + :meth:`RobotKinematics.com_world`
+        compute in two passes).
         """
         p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)
-        if sole is not None:
-            return (sole - p_pelvis_soles[side]) + p_pelvis_com
-        cached = self._feet_next  # computed last tick for this very time (same plan)
-        if cached is not None and cached[0] is self.plan and cached[1] == t:
-            feet = cached[2]
-        else:
-            feet = foot_trajectories(self.plan, t)
-        com_l = (feet.p_left - p_pelvis_soles[LEFT]) + p_pelvis_com
-        com_r = (feet.p_right - p_pelvis_soles[RIGHT]) + p_pelvis_com
+        if support is not None:
+            return (feet[support] - p_pelvis_soles[support]) + p_pelvis_com
+        com_l = (feet[LEFT] - p_pelvis_soles[LEFT]) + p_pelvis_com
+        com_r = (feet[RIGHT] - p_pelvis_soles[RIGHT]) + p_pelvis_com
         return 0.5 * (com_l + com_r)
 
     def snapshot_params(self) -> ControllerParams:

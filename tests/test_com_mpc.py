@@ -74,7 +74,8 @@ def test_closed_loop_walk_keeps_zmp_in_bounds_and_ends_at_midpoint():
         assert cp.ok
         state = cp.next_state
         zmp = state[0] - ZC / GRAVITY * state[2]
-        lo, hi = plan.zmp_bounds(np.array([(i + 1) * dt]), PARAMS.zmp_margin)
+        box = plan.sample((i + 1) * dt, PARAMS.zmp_margin)
+        lo, hi = box.zmp_lo, box.zmp_hi
         worst = max(worst, float(np.max(lo[0] - zmp)), float(np.max(zmp - hi[0])))
     assert worst <= 1e-3
     np.testing.assert_allclose(state[0], plan.feet_final[:, :2].mean(axis=0), atol=0.01)

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from controller.footsteps import FOOT_SIZE, LEFT, RIGHT, plan_footsteps
+from controller.footsteps import LEFT, RIGHT, plan_footsteps
 from controller.params import WalkParams
+from models.dyros_jet import FOOT_SIZE
 
 WALK = WalkParams(step_length=0.2, step_time=1.2, dsp_ratio=0.2, n_steps=4)
 
@@ -44,46 +45,47 @@ def test_timing(plan):
     np.testing.assert_allclose(plan.step_start, 0.8 + T * np.arange(5))
     assert plan.dsp_time == pytest.approx(0.24) and plan.ssp_time == pytest.approx(0.96)
     assert plan.t_end == pytest.approx(0.8 + 5 * T + 0.24 + 1.0)
-    assert plan.step_index(0.0) == -1 and plan.step_index(0.8) == 0
-    assert plan.step_index(2.0 - 1e-9) == 0 and plan.step_index(plan.t_end) == plan.n
-    np.testing.assert_array_equal(plan.step_index(np.array([0.1, 0.9, 2.1])), [-1, 0, 1])
-    ph = plan.phase(0.9)
-    assert ph.in_dsp and not ph.in_ssp and ph.swing_side == LEFT and ph.support_side == RIGHT
-    ph = plan.phase(0.8 + 0.24 + 0.48)
-    assert ph.in_ssp and ph.s_ssp == pytest.approx(0.5) and not ph.standing
-    assert plan.phase(0.1).standing and plan.phase(0.1).swing_side == -1
+    steps = plan.sample(np.array([0.0, 0.8, 2.0 - 1e-9, plan.t_end, 0.1, 0.9, 2.1])).step
+    np.testing.assert_array_equal(steps, [-1, 0, 0, plan.n, -1, 0, 1])
+    ph = plan.sample(0.9)
+    assert ph.in_dsp[0] and not ph.in_ssp[0]
+    assert ph.swing_side[0] == LEFT and ph.support_side[0] == RIGHT
+    ph = plan.sample(0.8 + 0.24 + 0.48)
+    assert ph.in_ssp[0] and ph.s_ssp[0] == pytest.approx(0.5) and not ph.standing[0]
+    ph = plan.sample(0.1)
+    assert ph.standing[0] and ph.swing_side[0] == -1 and not ph.in_dsp[0]
 
 
 def test_zmp_reference_path_and_continuity(plan):
     t = np.arange(-0.5, plan.t_end + 0.5, 0.001)
-    z = plan.zmp_reference(t)
+    z = plan.sample(t).zmp_ref
     assert z.shape == (t.size, 2)
     # continuous: max move per ms = distance / dsp_time
     assert np.max(np.abs(np.diff(z, axis=0))) < 0.3 / 0.24 * 0.001 + 1e-9
-    np.testing.assert_allclose(plan.zmp_reference(np.array([0.0, 0.8])), [[0, 0], [0, 0]])
+    np.testing.assert_allclose(plan.sample(np.array([0.0, 0.8])).zmp_ref, [[0, 0], [0, 0]])
     # SSP of step 0: on the right (support) foot; SSP of step 2: on the right foot at 0.4
     ssp_mid = plan.step_start + 0.24 + 0.48
-    np.testing.assert_allclose(plan.zmp_reference(ssp_mid), plan.support_pos[:, :2])
-    np.testing.assert_allclose(plan.zmp_reference(np.array([plan.t_end + 5])), [[0.8, 0.0]])
+    np.testing.assert_allclose(plan.sample(ssp_mid).zmp_ref, plan.support_pos[:, :2])
+    np.testing.assert_allclose(plan.sample(plan.t_end + 5).zmp_ref, [[0.8, 0.0]])
 
 
 def test_zmp_bounds_contain_reference_and_shrink_in_ssp(plan):
     t = np.linspace(0, plan.t_end, 3000)
-    lo, hi = plan.zmp_bounds(t, 0.02)
-    z = plan.zmp_reference(t)
-    assert np.all(z >= lo - 1e-12) and np.all(z <= hi + 1e-12)
-    ssp = plan.step_start[1] + 0.5
-    lo, hi = plan.zmp_bounds(np.array([ssp]), 0.02)
+    s = plan.sample(t, 0.02)
+    assert np.all(s.zmp_ref >= s.zmp_lo - 1e-12) and np.all(s.zmp_ref <= s.zmp_hi + 1e-12)
+    ssp = plan.sample(plan.step_start[1] + 0.5, 0.02)
+    lo, hi = ssp.zmp_lo, ssp.zmp_hi
     c = plan.support_pos[1, :2]
     np.testing.assert_allclose(hi[0] - c, np.array(FOOT_SIZE) / 2 - 0.02)
     np.testing.assert_allclose(c - lo[0], np.array(FOOT_SIZE) / 2 - 0.02)
-    lo, hi = plan.zmp_bounds(np.array([0.1]), 0.0)  # standing: both feet's box
-    np.testing.assert_allclose(hi[0, 1] - lo[0, 1], WALK.step_width + FOOT_SIZE[1])
+    stand = plan.sample(0.1)  # standing: both feet's box
+    width = stand.zmp_hi[0, 1] - stand.zmp_lo[0, 1]
+    assert width == pytest.approx(WALK.step_width + FOOT_SIZE[1])
 
 
 def test_feet_on_ground(plan):
     t = np.array([0.1, 0.9, 0.8 + 0.24 + 0.1, 2.0 + 0.3, plan.t_end])
-    g = plan.feet_on_ground(t)
+    g = plan.sample(t).on_ground
     np.testing.assert_array_equal(g, [[1, 1], [1, 1], [0, 1], [1, 0], [1, 1]])
 
 
@@ -101,8 +103,8 @@ def test_replanned_keeps_started_steps(plan):
     assert r.step_dsp[2] == pytest.approx(0.3)
     # the reference is unchanged up to now and continuous after
     t = np.arange(0, t_now, 0.01)
-    np.testing.assert_allclose(r.zmp_reference(t), plan.zmp_reference(t))
-    z = r.zmp_reference(np.arange(0, r.t_end, 0.001))
+    np.testing.assert_allclose(r.sample(t).zmp_ref, plan.sample(t).zmp_ref)
+    z = r.sample(np.arange(0, r.t_end, 0.001)).zmp_ref
     assert np.max(np.abs(np.diff(z, axis=0))) < 0.01
     # before the start: a fresh plan; in the closing step: only walk changes
     assert plan.replanned(new, 0.1).n == 7

@@ -7,13 +7,8 @@ import threading
 import numpy as np
 import pytest
 
-from app.web.live import (
-    FALL_RESET_S,
-    LiveSim,
-    check_methods,
-    live_params,
-    step_length_in_force,
-)
+from app.live import FALL_RESET_S, LiveSim, check_methods, live_params
+from app.live.history import ROW_COLUMNS
 from controller.footsteps import plan_footsteps
 from controller.params import ControllerParams, WalkParams
 
@@ -57,7 +52,7 @@ def test_live_params_have_a_long_plan():
 def test_intent_is_validated_and_versioned():
     sim = LiveSim(short_params())
     v0 = sim.intent.version
-    v1 = sim.update_params(walk={"step_length": 0.3})
+    v1 = sim.update_params(walk={"step_length": 0.3}).version
     assert v1 == v0 + 1 and sim.intent.params.walk.step_length == 0.3
     with pytest.raises(ValueError, match="step_length"):
         sim.update_params(walk={"step_length": 0.9})
@@ -68,11 +63,11 @@ def test_intent_is_validated_and_versioned():
 
 def test_step_length_in_force_follows_the_plan():
     plan = plan_footsteps(WalkParams(step_length=0.25, n_steps=4))
-    assert step_length_in_force(plan, -1) == pytest.approx(0.25)
-    assert step_length_in_force(plan, 2) == pytest.approx(0.25)
+    assert plan.step_length(-1) == pytest.approx(0.25)
+    assert plan.step_length(2) == pytest.approx(0.25)
     replanned = plan.replanned(WalkParams(step_length=0.35, n_steps=4), plan.step_start[1] + 0.1)
-    assert step_length_in_force(replanned, 1) == pytest.approx(0.25)
-    assert step_length_in_force(replanned, 2) == pytest.approx(0.35)
+    assert replanned.step_length(1) == pytest.approx(0.25)
+    assert replanned.step_length(2) == pytest.approx(0.35)
 
 
 def test_pacing_sleeps_to_the_wall_clock():
@@ -120,8 +115,8 @@ def test_pause_step_and_reset(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"])
     f = sim.wait_applied(sim.pause(), timeout=10)
     t = [r.t for r in f.robots]
-    f = _advance(sim)
-    assert [r.t for r in f.robots] == t  # paused: time stands still
+    assert sim.wait_frame(f.seq, timeout=0.5) is None  # paused: nothing new is published
+    assert [r.t for r in sim.frame().robots] == t  # and time stands still
     f = sim.wait_applied(sim.step(), timeout=10)
     assert [r.t for r in f.robots] == pytest.approx([x + DT for x in t], abs=1e-9)
     sim.step()
@@ -180,11 +175,11 @@ def test_a_fallen_robot_is_reset_after_a_while(running):
 def test_history_has_one_column_set_per_method(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"], speed=4.0)
     f = sim.frame()
-    while f is not None and (f.history is None or len(f.history.clock) < 20):
+    while f is not None and len(sim.history.window().column("mpc", "clock")) < 20:
         f = sim.wait_frame(f.seq, timeout=30)
-    h = f.history
-    assert set(h.values) == {"fixed", "mpc"}
-    for arr in h.values.values():
-        assert arr.shape == (len(h.clock), len(h.columns))
-        assert np.all(np.isfinite(arr[:, h.columns.index("waist_deg")]))
-    assert np.all(np.diff(h.clock) > 0)
+    h = sim.history.window()
+    assert set(h.rows) == {"fixed", "mpc"}
+    for method, arr in h.rows.items():
+        assert arr.shape[1] == len(ROW_COLUMNS)
+        assert np.all(np.isfinite(h.column(method, "waist_deg")))
+        assert np.all(np.diff(h.column(method, "clock")) > 0)

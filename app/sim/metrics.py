@@ -8,6 +8,14 @@ from __future__ import annotations
 
 import numpy as np
 
+# A walk is "clean" (the criterion for the longest step) when it succeeds with every landing
+# within LANDING_ERROR_CLEAN, no QP failure, no servo saturation, no joint at its speed limit,
+# and the legs never at the straight-knee singularity: kappa(J) above KAPPA_SINGULAR means the
+# knee is within ~0.01 rad of straight (kappa 1283 there, 128 at 0.1 rad:
+# tests/test_kinematics.py).
+KAPPA_SINGULAR = 1000.0
+LANDING_ERROR_CLEAN = 0.02  # [m]
+
 COLUMNS = (
     "t",                  # [s]
     "waist_angle",        # [rad] measured waist yaw
@@ -18,17 +26,22 @@ COLUMNS = (
     "h_low",              # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
     "h_up",               # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
     "kappa",              # condition number of the moving joints' Jacobian (eq. 45)
+    "kappa_legs",         # condition number of J_low's 12 leg columns (every method)
     "cop_x", "cop_y",     # [m] centre of pressure of the foot contact forces (nan if none)
     "zmp_in_support",     # 1 if the CoP is inside the support polygon
+    "balance_margin",     # [m] CoP to the support polygon's edge, > 0 inside
+    "sole_tilt",          # [rad] largest tilt of a foot in contact
     "zmp_ref_x", "zmp_ref_y",
     "lipm_zmp_x", "lipm_zmp_y",  # [m] ZMP of the LIPM from the measured CoM (paper Fig. 15)
     "com_x", "com_y", "com_z",   # [m] measured CoM (MuJoCo)
     "com_des_x", "com_des_y",    # [m] desired CoM (CoM MPC)
     "reach_left", "reach_right", # hip-to-ankle distance / leg length (commanded)
-    "energy",             # [J] cumulative positive joint work (eq. 44)
+    "energy",             # [J] cumulative positive joint work (eq. 44), 200 Hz samples
+    "energy_substep",     # [J] the same from every 1 ms substep
     "tick_ms",            # [ms] controller tick time
     "step_index",
     "in_ssp",
+    "speed_limited",      # 1 if a joint velocity sat at the IK's speed limit
 )
 
 
@@ -69,8 +82,11 @@ class Series:
 
 
 def two_step_windows(cum_energy_at_step_starts: np.ndarray) -> np.ndarray:
-    """Energy per two-step window (eq. 44) from the cumulative energy at each step start."""
+    """Energy per two-step window (eq. 44) from the cumulative energy at consecutive step starts.
+
+    Non-overlapping windows: starts 0-2, 2-4, ... Works along axis 0 (e.g. (steps, joints)).
+    """
     e = np.asarray(cum_energy_at_step_starts, dtype=float)
     if len(e) < 3:
-        return np.zeros(0)
+        return np.zeros((0, *e.shape[1:]))
     return e[2::2] - e[:-2:2][: len(e[2::2])]

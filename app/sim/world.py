@@ -2,9 +2,20 @@
 
 One owner of the simulation loop (mujoco_playground's pattern): ``sim_dt`` (MuJoCo's timestep)
 and ``control_dt`` (200 Hz) are separate and ``n_substeps = control_dt / sim_dt``. A control
-period = write the servo targets, then ``mj_step`` n_substeps times; energy (eq. 44) and servo
-saturation are accumulated over the substeps (the per-substep servo torques and joint rates
-are copied into preallocated buffers, the arithmetic is done once per control period).
+period = write the servo targets, then ``mj_step`` n_substeps times; servo saturation is
+counted over the substeps.
+
+Energy (eq. 44, the positive part of servo torque x joint speed, summed over time) is kept two
+ways, per joint:
+- ``energy_ctrl_per_joint``: from one sample of torque and speed per control period (200 Hz),
+  as a robot logs them: the figure the study and the live plots report (SPEC.md section 5);
+- ``energy_substep_per_joint``: from every MuJoCo substep (1 ms), which also counts the servo
+  chatter inside a control period: reported beside it.
+(The per-substep torques and rates are copied into preallocated buffers; the arithmetic is
+done once per control period.)
+
+A push (``push``) is a horizontal force on the torso (the floating base) through MuJoCo's
+``xfrc_applied``, held for a set duration of simulated time.
 """
 
 from __future__ import annotations
@@ -87,8 +98,20 @@ class World:
             arm = self.qpos_idx[13:]
             self.data.qpos[arm] += rng.normal(0.0, perturbation, len(arm))
         mujoco.mj_forward(self.model, self.data)
-        self.energy_per_joint = np.zeros(len(JOINTS))  # [J] positive mechanical work (eq. 44)
+        self.energy_ctrl_per_joint = np.zeros(len(JOINTS))  # [J] eq. (44) from 200 Hz samples
+        self.energy_substep_per_joint = np.zeros(len(JOINTS))  # [J] eq. (44) at every substep
         self.saturated_substeps = 0
+        self.data.xfrc_applied[:] = 0.0
+        self._push_left = 0  # substeps the current push still lasts
+
+    def push(self, force_xy: np.ndarray, duration: float) -> None:
+        """Apply a horizontal force [N] at the torso's centre of mass for ``duration`` [s]."""
+        self.data.xfrc_applied[self.root_id, :3] = (float(force_xy[0]), float(force_xy[1]), 0.0)
+        self._push_left = max(1, int(round(duration / self.sim_dt)))
+
+    @property
+    def pushing(self) -> bool:
+        return self._push_left > 0
 
     @property
     def time(self) -> float:
@@ -125,6 +148,11 @@ class World:
         mujoco.mj_subtreeVel(self.model, self.data)
         return float(self.data.subtree_angmom[self.root_id][2])
 
+    def sole_tilts(self) -> np.ndarray:
+        """(2,) [rad] angle of each sole's normal from the vertical (left, right)."""
+        zz = self.data.site_xmat[self.sole_site_ids, 8]  # element (2, 2) of each 3x3
+        return np.arccos(np.clip(zz, -1.0, 1.0))
+
     def torso_tilt(self) -> float:
         """Angle between the base z axis and the world z axis [rad]."""
         zz = float(self.data.xmat[self.root_id, 8])  # row-major 3x3: element (2, 2)
@@ -139,14 +167,20 @@ class World:
         act, qv = self._act_sel, self._qvel_sel
         for i in range(self.n_substeps):
             mujoco.mj_step(m, d)
+            if self._push_left:  # the push acted on this substep; it ends after the last one
+                self._push_left -= 1
+                if not self._push_left:
+                    d.xfrc_applied[self.root_id, :3] = 0.0
             tau[i] = d.actuator_force[act]
             qd[i] = d.qvel[qv]
-        # Positive work per substep, added substep by substep as before: row 0 holds the
-        # total so far and the cumulative sum adds the rows in order (same rounding).
+        # Positive work per substep, added substep by substep: row 0 holds the total so far
+        # and the cumulative sum adds the rows in order.
         e = self._energy_buf
-        e[0] = self.energy_per_joint
+        e[0] = self.energy_substep_per_joint
         np.maximum(tau * qd * self.sim_dt, 0.0, out=e[1:])
-        self.energy_per_joint[:] = np.add.accumulate(e, axis=0)[-1]
+        self.energy_substep_per_joint[:] = np.add.accumulate(e, axis=0)[-1]
+        # One sample per control period (the state at the tick), as a robot logs it.
+        self.energy_ctrl_per_joint += np.maximum(tau[-1] * qd[-1] * self.control_dt, 0.0)
         self.saturated_substeps += int(
             np.count_nonzero((np.abs(tau) >= self._sat_limit).any(axis=1))
         )
@@ -263,6 +297,31 @@ def point_in_polygon(p: np.ndarray, hull: np.ndarray, tol: float = 1e-3) -> bool
         if length == 0.0 or not (ex * (py - ay) - ey * (px - ax)) / length >= -tol:
             return False  # (a degenerate edge gave NaN before: not inside)
     return True
+
+
+def polygon_margin(p: np.ndarray, hull: np.ndarray) -> float:
+    """Signed distance [m] from p to the edge of a counter-clockwise convex polygon.
+
+    Positive inside (the distance to the nearest edge); outside, minus the largest distance
+    beyond an edge line (the exact distance unless the nearest point is a corner, where it
+    is a little less); -inf for a polygon with fewer than 3 vertices.
+    """
+    if len(hull) < 3:
+        return -math.inf
+    px, py = float(p[0]), float(p[1])
+    pts = np.asarray(hull, dtype=float).tolist()
+    margin = math.inf
+    outside = 0.0
+    for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1], strict=True):
+        ex, ey = bx - ax, by - ay
+        length = math.hypot(ex, ey)
+        if length == 0.0:
+            continue
+        d = (ex * (py - ay) - ey * (px - ax)) / length  # > 0 left of the edge: inside
+        margin = min(margin, d)
+        if d < 0.0:
+            outside = max(outside, -d)
+    return margin if margin >= 0.0 else -outside
 
 
 def _as_slice(idx: np.ndarray) -> slice | np.ndarray:

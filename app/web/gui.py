@@ -1,6 +1,6 @@
 """The viser control panel: parameters, comparison, playback, layers, presets, plots, lessons.
 
-Every control only writes intent into :class:`~app.web.live.LiveSim` (never the simulation).
+Every control only writes intent into :class:`~app.live.LiveSim` (never the simulation).
 Slider ranges, steps, defaults and labels come from :func:`controller.params.spec`, the single
 source of truth; gains whose range spans many orders of magnitude (e.g. gamma 1e-9..1) get a
 number box instead of a slider, which would be unusable at that step.
@@ -22,18 +22,12 @@ import numpy as np
 import viser
 import viser.uplot
 
-from app.web.live import (
-    HISTORY_COLUMNS,
-    SPEED_MAX,
-    SPEED_MIN,
-    LiveFrame,
-    LiveSim,
-    live_params,
-)
-from app.web.scene import LAYERS, METHOD_COLORS, METHOD_TITLES, SceneView
-from controller.params import METHODS, ControllerParams, spec
+from app.live import SPEED_MAX, SPEED_MIN, LiveFrame, LiveSim, live_params
+from app.web.scene import LAYERS, SceneView
+from controller.params import METHOD_INFO, METHODS, ControllerParams, spec
 
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces the slider
+PLOT_WINDOW_S = 12.0  # [s] of history the live plots show
 
 # The GUI folders of parameters: folder -> (group, field) in controller.params.
 PARAM_FOLDERS: dict[str, tuple[tuple[str, str], ...]] = {
@@ -119,7 +113,7 @@ EXPLAIN: dict[str, str] = {
     ),
 }
 
-PLOTS = (  # (history column, title)
+PLOTS = (  # (plot row column, title)
     ("waist_deg", "Waist yaw [deg]"),
     ("waist_rate_deg_s", "Waist yaw rate [deg/s]"),
     ("yaw_momentum", "Yaw momentum [kg m^2/s]"),
@@ -183,7 +177,7 @@ class ControlPanel:
                     self._add_param(group, name, getattr(getattr(intent.params, group), name))
         with gui.add_folder("Compare"):
             for method in METHODS:
-                box = gui.add_checkbox(METHOD_TITLES[method], method in intent.methods)
+                box = gui.add_checkbox(METHOD_INFO[method].title, method in intent.methods)
                 box.on_update(lambda _e: self._methods_changed())
                 self.method_boxes[method] = box
         with gui.add_folder("Playback"):
@@ -330,25 +324,22 @@ class ControlPanel:
             self.status.content = text
 
     def _update_plots(self, frame: LiveFrame) -> None:
-        hist = frame.history
-        if hist is None:
-            return
         methods = tuple(r.method for r in frame.robots)
         if methods != self._plot_methods:
             self._build_plots(methods)
         if abs(frame.clock - self._plot_clock) < 0.2 and not frame.paused:  # ~5 Hz
             return
         self._plot_clock = frame.clock
-        ok = np.isfinite(hist.clock)
-        x = hist.clock[ok] - frame.clock
-        if len(x) < 2:
+        window = self.live.history.window(PLOT_WINDOW_S, until=frame.clock)
+        clock = window.column(methods[0], "clock") if methods else np.zeros(0)
+        if len(clock) < 2:
             return
+        x = clock - frame.clock
         for col, handle in self.plots.items():
-            j = HISTORY_COLUMNS.index(col)
             ys = []
             for m in methods:
-                arr = hist.values.get(m)
-                ys.append(arr[ok, j] if arr is not None else np.full(len(x), np.nan))
+                y = window.column(m, col)
+                ys.append(y if len(y) == len(x) else np.full(len(x), np.nan))
             handle.data = (x, *ys)
 
     def _build_plots(self, methods: tuple[str, ...]) -> None:
@@ -357,7 +348,7 @@ class ControlPanel:
         self.plots = {}
         series = (
             viser.uplot.Series(label="t - now [s]"),
-            *(viser.uplot.Series(label=m, stroke=_css(METHOD_COLORS[m]), width=2)
+            *(viser.uplot.Series(label=m, stroke=_css(METHOD_INFO[m].color), width=2)
               for m in methods),
         )
         empty = tuple(np.zeros(2) for _ in range(len(methods) + 1))
@@ -365,8 +356,7 @@ class ControlPanel:
             for col, title in PLOTS:
                 self.plots[col] = self.server.gui.add_uplot(
                     data=empty, series=series, title=title, aspect=1.8,
-                    scales={"x": viser.uplot.Scale(time=False,
-                                                   range=(-self.live.history_s, 0.0))},
+                    scales={"x": viser.uplot.Scale(time=False, range=(-PLOT_WINDOW_S, 0.0))},
                 )
         self._plot_methods = methods
 

@@ -33,24 +33,14 @@ from typing import Any
 import numpy as np
 import viser
 
+from app.live import LiveFrame, RobotFrame
 from app.sim.world import convex_hull
-from app.web.live import LiveFrame, RobotFrame
-from controller.footsteps import FOOT_SIZE, LEFT
+from controller.footsteps import LEFT
+from controller.params import METHOD_INFO
 from controller.pelvis_reference import hip_points
-from controller.swing import foot_trajectories
-from models.dyros_jet import HIP_OFFSET
+from models.dyros_jet import FOOT_SIZE, HIP_OFFSET
 
 ROBOT_SPACING = 1.6  # [m] between robots, in y
-METHOD_TITLES = {
-    "fixed": "fixed pelvis",
-    "redundancy": "redundancy (ref. [21])",
-    "mpc": "pelvic-rotation MPC (proposed)",
-}
-METHOD_COLORS = {  # RGB, also used by the plots
-    "fixed": (90, 140, 255),
-    "redundancy": (255, 170, 30),
-    "mpc": (40, 200, 110),
-}
 LAYERS = {  # key -> label (GUI); all shown by default
     "robots": "Robots",
     "footholds": "Planned footholds",
@@ -108,10 +98,10 @@ class _Handles:
 
     def __init__(self, server: viser.ViserServer, root: str, method: str):
         sc = server.scene
-        color = METHOD_COLORS.get(method, (200, 200, 200))
+        color = METHOD_INFO[method].color
         self.root = sc.add_frame(root, show_axes=False)
         seg = _EMPTY_SEG
-        self.label = sc.add_label(f"{root}/label", METHOD_TITLES.get(method, method),
+        self.label = sc.add_label(f"{root}/label", METHOD_INFO[method].title,
                                   position=(0.0, 0.0, 2.0), font_screen_scale=0.8)
         self.footholds = sc.add_line_segments(f"{root}/footholds", seg, (255, 255, 255),
                                               thickness=0.012)
@@ -185,8 +175,8 @@ def _segments(x: np.ndarray) -> np.ndarray:
 
 def draw_label(h: _Handles, r: RobotFrame) -> None:
     """The method and live numbers above the robot."""
-    title = METHOD_TITLES.get(r.method, r.method)
-    reach = r.tick.reach if r.tick is not None else np.full(2, np.nan)
+    title = METHOD_INFO[r.method].title
+    reach = r.reach
     status = "FELL (reset in 2 s)" if r.fell else f"step {max(r.step_index, 0)}"
     text = (
         f"{title}\n{status}, {r.step_length:.2f} m, waist {np.degrees(r.waist_angle):+.0f} deg, "
@@ -231,8 +221,8 @@ def draw_support(h: _Handles, r: RobotFrame) -> None:
 
 def draw_zmp(h: _Handles, r: RobotFrame) -> None:
     """ZMP reference (orange) and the measured centre of pressure (magenta)."""
-    if r.tick is not None:
-        h.set(h.zmp_ref, "position", np.array([*r.tick.zmp_ref, 0.01]))
+    if r.zmp_ref is not None:
+        h.set(h.zmp_ref, "position", np.array([*r.zmp_ref, 0.01]))
     if r.cop is None:
         h.set(h.cop, "visible", False)
     else:
@@ -241,9 +231,9 @@ def draw_zmp(h: _Handles, r: RobotFrame) -> None:
 
 def draw_com_plan(h: _Handles, r: RobotFrame) -> None:
     """The CoM the CoM MPC predicts over its horizon (eq. 25-26), at the CoM height."""
-    if r.tick is None:
+    if r.horizon is None:
         return
-    com = r.tick.com_plan.com
+    com = r.horizon.com
     pts = np.column_stack([com, np.full(len(com), r.com[2])])
     h.set(h.com_line, "points", _segments(polyline_segments(pts)))
     h.set(h.com_points, "points", pts.astype(np.float32))
@@ -251,20 +241,19 @@ def draw_com_plan(h: _Handles, r: RobotFrame) -> None:
 
 def draw_hips(h: _Handles, r: RobotFrame) -> None:
     """Hip lines at the predicted pelvis positions: reference angle and MPC's optimised angle."""
-    if r.tick is None:
+    if r.horizon is None or r.pelvis_des is None:
         return
-    z_hip = float(r.tick.p_world_pelvis_des[2] + HIP_OFFSET[2])
-    com = r.tick.com_plan.com
-    n = min(len(com), len(r.tick.theta_ref))
+    z_hip = float(r.pelvis_des[2] + HIP_OFFSET[2])
+    com = r.horizon.com
+    n = min(len(com), len(r.horizon.theta_ref))
 
     def lines(theta: np.ndarray, z: float) -> np.ndarray:
         hp = hip_points(com[:n], theta[:n])  # (n, 2, 2)
         return np.concatenate([hp, np.full((n, 2, 1), z)], axis=2)
 
-    h.set(h.hips_ref, "points", _segments(lines(r.tick.theta_ref, z_hip)))
-    plan = r.tick.pelvis_plan
-    if plan is not None:
-        h.set(h.hips_mpc, "points", _segments(lines(np.asarray(plan.angles), z_hip + 0.03)))
+    h.set(h.hips_ref, "points", _segments(lines(r.horizon.theta_ref, z_hip)))
+    if r.method == "mpc":
+        h.set(h.hips_mpc, "points", _segments(lines(r.horizon.theta, z_hip + 0.03)))
     else:
         h.set(h.hips_mpc, "visible", False)
     h.set(h.hips_now, "points", _segments(r.hips[None]))
@@ -274,14 +263,14 @@ def draw_swing(h: _Handles, r: RobotFrame, samples: int = 24) -> None:
     """Path of the swing foot over the step in progress (eq. 20-21)."""
     plan = r.plan
     k = r.step_index
-    if r.tick is None or not (0 <= k < plan.n):
+    if r.horizon is None or not (0 <= k < plan.n):
         h.set(h.swing, "visible", False)
         return
     key = (id(plan), k)
     if h.swing_key != key:  # the path changes only with the step (or a replan)
         start = plan.step_start[k] + plan.step_dsp[k]
         end = plan.step_start[k] + plan.step_duration[k]
-        feet = foot_trajectories(plan, np.linspace(start, end, samples))
+        feet = plan.sample(np.linspace(start, end, samples))
         side = int(plan.swing_side[k])
         path = feet.p_left if side == LEFT else feet.p_right
         h.swing_key = key
@@ -301,9 +290,9 @@ def draw_momentum(h: _Handles, r: RobotFrame) -> None:
 
 def draw_reach(h: _Handles, r: RobotFrame) -> None:
     """Each leg's reach (hip-to-ankle / leg length): coloured leg lines and gauge bars."""
-    if r.tick is None:
+    if r.horizon is None:
         return
-    reach = np.asarray(r.tick.reach, dtype=float)
+    reach = np.asarray(r.reach, dtype=float)
     colors = np.array([reach_color(v) for v in reach], dtype=np.uint8)  # (2, 3)
     legs = np.stack([r.hips, r.ankles], axis=1)  # (2, 2, 3)
     h.set(h.legs, "points", legs.astype(np.float32))

@@ -1,0 +1,18 @@
+"""The live simulation of the web tool (STYLE.md: one owner of the loop, intent in, frames out).
+
+- ``intent``: what users ask for (:class:`Intent`), replaced atomically by callbacks;
+- ``loop``: :class:`LiveLoop` ticks the robots, paces them, publishes frames (no display code);
+- ``frames``: the immutable :class:`LiveFrame` / :class:`RobotFrame` the displays draw;
+- ``history``: plot rows and kept frames, bounded (pause, scrub, record);
+- ``session``: :class:`LiveSim`, a session run by a thread, with the waits the API needs.
+"""
+
+from app.live.frames import Horizon, LiveFrame, RobotFrame
+from app.live.intent import SPEED_MAX, SPEED_MIN, Intent, check_methods
+from app.live.loop import FALL_RESET_S, LIVE_STEPS, live_params
+from app.live.session import LiveSim
+
+__all__ = [
+    "FALL_RESET_S", "LIVE_STEPS", "SPEED_MAX", "SPEED_MIN", "Horizon", "Intent", "LiveFrame",
+    "LiveSim", "RobotFrame", "check_methods", "live_params",
+]

@@ -1,0 +1,351 @@
+"""The live loop: it reads intent, ticks the robots, paces to the wall clock and publishes.
+
+Pattern (STYLE.md, mujoco_playground / pink's gizmo example): one owner of the simulation.
+:class:`LiveLoop` holds one :class:`~app.sim.session.Session` per selected method (same
+parameters, the method differs) and knows nothing of displays or the web: it reads the
+latest :class:`~app.live.intent.Intent` from a callable and hands each
+:class:`~app.live.frames.LiveFrame` to a callable. It runs in a thread of the web process
+(:class:`app.live.session.LiveSim`) or in a worker process; either way one iteration is:
+
+1. apply new intent (rebuild the robots on a reset or a change of methods, hand new
+   parameters to every walker, re-anchor the clock on pause / speed changes, pushes);
+2. tick every robot one control period (or, paused, carry out one single-step request);
+3. record a plot row every ``HISTORY_DECIMATION`` ticks;
+4. publish a frame at the display rate (always after an intent or a single step);
+5. sleep to the wall clock x ``speed``; when it cannot keep up it runs as fast as it can
+   and reports the real-time factor it measured.
+
+Live choices: plans are long (``LIVE_STEPS``); a robot whose plan ends starts again; a robot
+that falls is shown fallen for ``FALL_RESET_S`` of simulated time, then restarts. A robot
+that restarts alone stands by until the others reach the same point of their step cycle
+(a left step about to start ``t_start`` later), so side-by-side robots stay in phase; a reset
+or a change of methods restarts all of them together.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import logging
+import math
+import time
+from collections import deque
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from app.live.frames import LiveFrame, robot_frame
+from app.live.history import HISTORY_DECIMATION, ROW_COLUMNS
+from app.live.intent import Intent
+from app.sim.session import RunConfig, Session
+from controller.params import ControllerParams
+
+log = logging.getLogger(__name__)
+
+LIVE_STEPS = 200  # steps per live plan; the robot restarts when it ends
+FALL_RESET_S = 2.0  # [s] of simulated time a fallen robot stays down before it restarts
+RTF_WINDOW_S = 3.0  # [s] of wall time over which the real-time factor is measured
+PUBLISH_HZ = 30.0  # frames per second of wall time while running (the display rate)
+SERIES_S = 4.0  # [s] each robot's own time series ring (the loop reads only its last row)
+STEP_UNTIL_MAX_S = 3.0  # [s] a "next lift-off / landing" step gives up after this
+BEHIND_S = 0.25  # [s] behind the wall clock by more: re-anchor instead of catching up
+
+
+def live_params(params: ControllerParams | None = None) -> ControllerParams:
+    """The default live parameters: the controller's defaults with a long plan."""
+    return (params or ControllerParams()).replace(walk={"n_steps": LIVE_STEPS})
+
+
+@dataclass
+class _Robot:
+    """One robot's session plus the live bookkeeping around it (loop only)."""
+
+    method: str
+    session: Session
+    falls: int = 0
+    walks_completed: int = 0
+    last_walk_success: bool | None = None
+    error: str | None = None  # the controller raised: shown down, then restarted
+    fell_at: float | None = None  # the robot's time of its fall
+    waiting_since: float | None = None  # session clock when it began standing by
+    _energy_key: int = -1
+    _energy: float = math.nan
+
+    @property
+    def fell(self) -> bool:
+        return self.session.fell or self.error is not None
+
+    @property
+    def waiting(self) -> bool:
+        return self.waiting_since is not None
+
+    def two_step_energy(self) -> float:
+        """The last completed two-step window's energy [J] (the quantity of Table 1)."""
+        key = len(self.session.energy_at_step_start)
+        if key != self._energy_key:
+            windows = self.session.energy_windows()
+            self._energy = float(windows[-1].sum()) if len(windows) else math.nan
+            self._energy_key = key
+        return self._energy
+
+
+@dataclass
+class _Rates:
+    """Real-time factors over the last RTF_WINDOW_S of wall time."""
+
+    samples: deque[tuple[float, float, float]] = field(default_factory=deque)  # wall, sim, busy
+
+    def add(self, wall: float, sim: float, busy: float) -> None:
+        self.samples.append((wall, sim, busy))
+        while self.samples and wall - self.samples[0][0] > RTF_WINDOW_S:
+            self.samples.popleft()
+
+    def get(self) -> tuple[float | None, float | None]:
+        """(simulated / wall, simulated / compute), None until 0.5 s of data."""
+        if len(self.samples) < 2:
+            return None, None
+        (w0, s0, b0), (w1, s1, b1) = self.samples[0], self.samples[-1]
+        if w1 - w0 < 0.5:
+            return None, None
+        return (s1 - s0) / (w1 - w0), ((s1 - s0) / (b1 - b0) if b1 > b0 else None)
+
+
+class LiveLoop:
+    """The robots of one live session, advanced from intent to frames (one thread).
+
+    Args:
+        intents: returns the latest intent (called every iteration).
+        publish: receives every published frame.
+        clock: the wall clock (seconds).
+        sleep: the pacing sleep: waits up to the given seconds (returning early when the
+            intent changes is welcome).
+        idle: waits up to the given seconds while paused; must return early when the intent
+            changes (default: ``sleep``).
+        publish_hz: frames per second of wall time while running.
+    """
+
+    def __init__(
+        self,
+        intents: Callable[[], Intent],
+        publish: Callable[[LiveFrame], None],
+        clock: Callable[[], float] = time.perf_counter,
+        sleep: Callable[[float], None] = time.sleep,
+        idle: Callable[[float], None] | None = None,
+        publish_hz: float = PUBLISH_HZ,
+    ):
+        self._intents = intents
+        self._publish_to = publish
+        self._clock = clock
+        self._sleep = sleep
+        self._idle = idle or sleep
+        self.publish_interval = 1.0 / publish_hz
+        self.robots: dict[str, _Robot] = {}
+        self.applied: Intent | None = None
+        self.clock = 0.0  # [s] simulated time since the session started
+        self.steps_done = 0
+        self.pushes_done = 0
+        self.seq = 0
+        self._resets_done = 0
+        self._ticks = 0
+        self._busy = 0.0
+        self._rates = _Rates()
+        self._anchor = (clock(), 0.0)  # (wall, simulated) the pacing counts from
+        self._rows: dict[str, list[np.ndarray]] = {}
+        self._last_publish = -math.inf
+        self._restarted = True
+        self._dirty = True  # something to publish even if paused
+
+    # -- one iteration ---------------------------------------------------------------------
+    def iterate(self) -> None:
+        """Apply intent, tick (or wait while paused), publish, pace."""
+        intent = self._intents()
+        if self.applied is None or intent.version != self.applied.version:
+            self._apply(intent)
+        pending = intent.step_requests - self.steps_done
+        if intent.paused and pending <= 0:
+            if self._dirty:
+                self._publish(intent)
+            self._idle(0.05)
+            return
+        t0 = self._clock()
+        if intent.paused:  # one single-step request
+            self._single_step(intent)
+            self.steps_done += 1
+        else:
+            self._tick_all(intent)
+        self._busy += self._clock() - t0
+        now = self._clock()
+        self._rates.add(now, self.clock, self._busy)
+        if intent.paused or now - self._last_publish >= self.publish_interval:
+            self._publish(intent)
+        if not intent.paused:
+            self._pace(intent)
+
+    def _apply(self, intent: Intent) -> None:
+        old = self.applied
+        if old is None or intent.methods != old.methods or (
+            intent.reset_requests != self._resets_done
+        ):
+            self.robots = {m: self._robot(m, intent.params) for m in intent.methods}
+            self._resets_done = intent.reset_requests
+            self._rows = {}
+            self._restarted = True
+        elif intent.params != old.params:
+            for robot in self.robots.values():
+                robot.session.walker.set_params(dataclasses.replace(intent.params,
+                                                                    method=robot.method))
+        if old is None or intent.speed != old.speed or intent.paused != old.paused:
+            self._anchor = (self._clock(), self.clock)
+            self._rates = _Rates()
+        if not intent.paused:
+            self.steps_done = intent.step_requests  # resuming drops pending single steps
+        for push in intent.pushes:
+            if push.number > self.pushes_done:
+                robot = self.robots.get(push.method)
+                if robot is not None and not robot.fell:
+                    robot.session.push(np.asarray(push.force), push.duration)
+                self.pushes_done = push.number
+        self.applied = intent
+        self._dirty = True
+
+    # -- ticking -----------------------------------------------------------------------------
+    def _robot(self, method: str, params: ControllerParams) -> _Robot:
+        cfg = RunConfig(params=dataclasses.replace(params, method=method))
+        return _Robot(method, Session(cfg, capacity=int(SERIES_S / params.control_dt)))
+
+    def _tick_all(self, intent: Intent) -> None:
+        """One control period for every robot; a plot row every HISTORY_DECIMATION ticks."""
+        for robot in self.robots.values():
+            self._tick_robot(robot, intent.params)
+        self.clock += intent.params.control_dt
+        self._ticks += 1
+        if self._ticks % HISTORY_DECIMATION == 0 or intent.paused:
+            self._record_rows()
+
+    def _single_step(self, intent: Intent) -> None:
+        """Advance to the next tick, lift-off or landing of the first walking robot."""
+        ref = self._reference()
+        if intent.step_until == "tick" or ref is None:
+            self._tick_all(intent)
+            return
+        last = ref.session.last
+        was_ssp, step = (last.in_ssp, last.step_index) if last is not None else (False, -1)
+        for _ in range(int(STEP_UNTIL_MAX_S / intent.params.control_dt)):
+            self._tick_all(intent)
+            out = ref.session.last
+            if out is None or ref.fell:
+                return
+            if intent.step_until == "liftoff" and out.in_ssp and not was_ssp:
+                return
+            if intent.step_until == "landing" and was_ssp and (
+                not out.in_ssp or out.step_index != step
+            ):
+                return
+            was_ssp, step = out.in_ssp, out.step_index
+
+    def _tick_robot(self, robot: _Robot, params: ControllerParams) -> None:
+        s = robot.session
+        if robot.waiting:
+            self._start_if_in_phase(robot)
+            return
+        if robot.fell:
+            if robot.fell_at is None:
+                robot.fell_at = s.t
+                robot.falls += 1
+                robot.last_walk_success = False
+            if s.t - robot.fell_at >= FALL_RESET_S:
+                self._restart(robot, params)
+                return
+        elif s.walker.finished:
+            robot.walks_completed += 1
+            robot.last_walk_success = True
+            self._restart(robot, params)
+            return
+        if robot.error is not None:  # shown down while the time runs, then restarted
+            s.walker.t += s.params.control_dt
+            return
+        try:
+            s.tick()
+        except Exception as exc:  # noqa: BLE001 - one robot's failure must not stop the loop
+            log.exception("robot %s: controller tick failed", robot.method)
+            robot.error = f"{type(exc).__name__}: {exc}"
+
+    def _restart(self, robot: _Robot, params: ControllerParams) -> None:
+        """A fresh session that stands by until it can start in phase with the others."""
+        fresh = self._robot(robot.method, params)
+        robot.session, robot.error, robot.fell_at = fresh.session, None, None
+        robot.waiting_since = self.clock
+        robot._energy_key = -1
+        self._start_if_in_phase(robot)
+
+    def _reference(self) -> _Robot | None:
+        """The first robot that walks (not fallen, not standing by)."""
+        return next((r for r in self.robots.values() if not r.fell and not r.waiting), None)
+
+    def _start_if_in_phase(self, robot: _Robot) -> None:
+        """Start a waiting robot when the reference is where a fresh plan would be at t = 0.
+
+        A fresh plan stands ``t_start`` and then steps with the left foot; it joins when the
+        reference robot is ``t_start`` before the start of one of its own left steps (same
+        timing from then on), or alone, or after two step cycles of waiting at most.
+        """
+        ref = self._reference()
+        plan = robot.session.plan
+        waited = self.clock - (robot.waiting_since or self.clock)
+        start = ref is None or waited > 2 * 2 * plan.walk.step_time + plan.t_start
+        if not start and ref is not None:
+            rp, dt = ref.session.plan, ref.session.params.control_dt
+            lead = rp.step_start[: rp.n_walking_steps] - plan.t_start - ref.session.t
+            left = rp.swing_side[: rp.n_walking_steps] == plan.swing_side[0]
+            start = bool(np.any(left & (lead > -dt / 2) & (lead <= dt / 2)))
+        if start:
+            robot.waiting_since = None
+
+    # -- rows, frames, pacing -----------------------------------------------------------------
+    def _record_rows(self) -> None:
+        for method, robot in self.robots.items():
+            s, out, m = robot.session, robot.session.last, robot.session.measured
+            walking = out is not None and 0 <= out.step_index < s.plan.n
+            row = np.array([
+                self.clock, s.t,
+                math.degrees(m.waist_angle) if m is not None else math.nan,
+                math.degrees(out.waist_rate) if out is not None else math.nan,
+                m.yaw_momentum if m is not None else math.nan,
+                out.kappa if out is not None else math.nan,
+                robot.two_step_energy(),
+                (0.0 if out.in_ssp else 1.0) if walking else math.nan,
+                out.step_index if out is not None else -1,
+                float(robot.fell),
+            ])
+            self._rows.setdefault(method, []).append(row)
+
+    def _publish(self, intent: Intent) -> None:
+        rtf, compute = self._rates.get()
+        if intent.paused:
+            rtf = compute = None
+        rows = {m: np.array(r).reshape(-1, len(ROW_COLUMNS)) for m, r in self._rows.items()}
+        self._rows = {}
+        self.seq += 1
+        frame = LiveFrame(
+            seq=self.seq, clock=self.clock, paused=intent.paused, speed=intent.speed,
+            realtime_factor=rtf, compute_realtime_factor=compute,
+            intent_version=intent.version, steps_done=self.steps_done,
+            pushes_done=self.pushes_done,
+            robots=tuple(
+                robot_frame(r.session, slot, r.method, r.falls, r.walks_completed,
+                            r.last_walk_success, r.waiting, r.error)
+                for slot, r in enumerate(self.robots.values())
+            ),
+            rows=rows, restarted=self._restarted,
+        )
+        self._restarted = self._dirty = False
+        self._last_publish = self._clock()
+        self._publish_to(frame)
+
+    def _pace(self, intent: Intent) -> None:
+        wall0, sim0 = self._anchor
+        ahead = wall0 + (self.clock - sim0) / intent.speed - self._clock()
+        if ahead > 0:
+            self._sleep(ahead)
+        elif ahead < -BEHIND_S:  # cannot keep up: run as fast as possible from here
+            self._anchor = (self._clock(), self.clock)

@@ -1,0 +1,250 @@
+"""A live session as its users see it: intent in, frames out, the past kept for scrubbing.
+
+:class:`LiveSim` runs a :class:`~app.live.loop.LiveLoop` in a thread of this process and
+keeps, on the display side, the latest frame, the plot rows (:class:`PlotHistory`) and the
+last seconds of frames (:class:`FrameStore`). Callers (web handlers, GUI callbacks, tests)
+only write intent through its methods, each of which returns the new
+:class:`~app.live.intent.Intent`: a ticket that :meth:`LiveSim.wait_applied` waits on (the
+loop reports in every frame which intent it has read, how many single steps and which pushes
+it has carried out).
+
+While paused, :meth:`LiveSim.seek` shows a kept instant: :meth:`LiveSim.shown_frame` is then
+the kept frame nearest to it (scene, horizon inspector, plot cursor); resuming returns to the
+present.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from collections.abc import Callable, Sequence
+
+from app.live.frames import LiveFrame
+from app.live.history import FrameStore, PlotHistory
+from app.live.intent import (
+    DEFAULT_METHODS,
+    PUSHES_KEPT,
+    STEP_UNTIL,
+    Intent,
+    IntentBox,
+    Push,
+    check_methods,
+    check_push,
+    check_speed,
+)
+from app.live.loop import PUBLISH_HZ, LiveLoop, live_params
+from controller.params import ControllerParams
+
+log = logging.getLogger(__name__)
+KEEP_S = 40.0  # [s] of frames kept for scrubbing and recording (at least 30 s)
+PLOT_HISTORY_S = 60.0  # [s] of plot rows kept
+
+
+class LiveSim:
+    """One live session run by a thread of this process.
+
+    Args:
+        params: the initial parameters (default: :func:`~app.live.loop.live_params`).
+        methods: the robots to show, one per method.
+        speed: playback speed (x real time).
+        clock, sleep: the wall clock and the pacing sleep (tests may pass a no-op sleep to
+            run unpaced; the controller and simulation are always real).
+        keep_s: seconds of frames kept for scrubbing; publish_hz: frames per wall second.
+    """
+
+    def __init__(
+        self,
+        params: ControllerParams | None = None,
+        methods: Sequence[str] = DEFAULT_METHODS,
+        speed: float = 1.0,
+        clock: Callable[[], float] = time.perf_counter,
+        sleep: Callable[[float], None] | None = None,
+        keep_s: float = KEEP_S,
+        publish_hz: float = PUBLISH_HZ,
+    ):
+        params = (params or live_params()).validated()
+        self._wake = threading.Event()  # set on every intent change (cuts a pacing sleep)
+        self._box = IntentBox(
+            Intent(params=params, methods=check_methods(methods), speed=check_speed(speed)),
+            on_change=self._wake.set,
+        )
+        self._changed = threading.Condition()  # notified when a frame arrives
+        self._frame: LiveFrame | None = None
+        self._shown: float | None = None  # session clock shown while paused (seek)
+        self.history = PlotHistory(PLOT_HISTORY_S)
+        self.frames = FrameStore(keep_s)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.error: str | None = None  # set if the loop itself died
+        self.loop = LiveLoop(self._box.get, self._receive, clock=clock,
+                             sleep=sleep or self._pause_for, idle=self._pause_for,
+                             publish_hz=publish_hz)
+
+    # -- intent (any thread); each returns the new intent, a ticket for wait_applied --------
+    @property
+    def intent(self) -> Intent:
+        return self._box.get()
+
+    def set_params(self, params: ControllerParams) -> Intent:
+        params = params.validated()
+        return self._box.modify(lambda _cur: {"params": params})
+
+    def update_params(self, **groups) -> Intent:
+        """Partial change, e.g. ``update_params(walk={"step_length": 0.3})``; ValueError."""
+        return self._box.modify(lambda cur: {"params": cur.params.replace(**groups)})
+
+    def set_methods(self, methods: Sequence[str]) -> Intent:
+        methods = check_methods(methods)
+        if methods == self.intent.methods:
+            return self.intent
+        return self._box.modify(lambda _cur: {"methods": methods})
+
+    def set_speed(self, speed: float) -> Intent:
+        speed = check_speed(speed)
+        return self._box.modify(lambda _cur: {"speed": speed})
+
+    def pause(self) -> Intent:
+        return self._box.modify(lambda _cur: {"paused": True})
+
+    def resume(self) -> Intent:
+        self._shown = None
+        return self._box.modify(lambda _cur: {"paused": False})
+
+    def step(self, until: str = "tick") -> Intent:
+        """Pause (if running) and advance one tick, or to the next lift-off or landing."""
+        if until not in STEP_UNTIL:
+            raise ValueError(f"step until must be one of {', '.join(STEP_UNTIL)}, got {until!r}")
+        self._shown = None
+        return self._box.modify(lambda cur: {
+            "paused": True, "step_requests": cur.step_requests + 1, "step_until": until})
+
+    def reset(self) -> Intent:
+        """Restart every robot from standing (t = 0), all together."""
+        self._shown = None
+        return self._box.modify(lambda cur: {"reset_requests": cur.reset_requests + 1})
+
+    def push(self, method: str, force: Sequence[float], duration: float) -> Intent:
+        """Push one robot's torso horizontally; ValueError on an unknown robot or size."""
+
+        def change(cur: Intent) -> dict:
+            f, d = check_push(method, force, duration, cur.methods)
+            number = (cur.pushes[-1].number if cur.pushes else 0) + 1
+            return {"pushes": (*cur.pushes, Push(number, method, f, d))[-PUSHES_KEPT:]}
+
+        return self._box.modify(change)
+
+    def seek(self, clock: float) -> LiveFrame:
+        """While paused, show the kept instant nearest to ``clock`` [s]; ValueError otherwise."""
+        if not self.intent.paused:
+            raise ValueError("pause first: seeking shows a kept instant of a paused session")
+        if not math.isfinite(clock):
+            raise ValueError(f"t must be finite, got {clock}")
+        frame = self.frames.nearest(clock)
+        if frame is None:
+            raise ValueError("nothing kept yet")
+        self._shown = frame.clock
+        return frame
+
+    # -- frames (any thread) ---------------------------------------------------------------
+    def frame(self) -> LiveFrame | None:
+        """The latest published frame (immutable)."""
+        with self._changed:
+            return self._frame
+
+    def shown_frame(self) -> LiveFrame | None:
+        """The frame the displays show: the sought one while paused, else the latest."""
+        shown = self._shown
+        if shown is not None and self.intent.paused:
+            kept = self.frames.nearest(shown)
+            if kept is not None:
+                return kept
+        return self.frame()
+
+    @property
+    def shown_clock(self) -> float | None:
+        """The session clock of the instant shown, or None when showing the present."""
+        return self._shown if self.intent.paused else None
+
+    def wait_frame(self, after_seq: int = -1, timeout: float = 5.0) -> LiveFrame | None:
+        """Block until a frame newer than ``after_seq`` is published; None on timeout."""
+        return self._wait(lambda f: f.seq > after_seq, timeout)
+
+    def wait_applied(self, ticket: Intent | int, timeout: float = 5.0) -> LiveFrame | None:
+        """Block until a frame shows ``ticket`` carried out (its version read, its single
+        steps and pushes done); None on timeout. An int is taken as a version."""
+        if isinstance(ticket, int):
+            ticket = Intent(params=self.intent.params, version=ticket)
+        last_push = ticket.pushes[-1].number if ticket.pushes else 0
+        return self._wait(
+            lambda f: f.intent_version >= ticket.version
+            and (f.steps_done >= ticket.step_requests or not f.paused)
+            and f.pushes_done >= last_push,
+            timeout,
+        )
+
+    def _wait(self, ok: Callable[[LiveFrame], bool], timeout: float) -> LiveFrame | None:
+        deadline = time.monotonic() + timeout
+        with self._changed:
+            while True:
+                f = self._frame
+                if f is not None and ok(f):
+                    return f
+                left = deadline - time.monotonic()
+                if left <= 0 or self._stop.is_set() or (self._thread and not self.running):
+                    return None
+                self._changed.wait(left)
+
+    def _receive(self, frame: LiveFrame) -> None:
+        """The loop's publish callback: keep the frame, its rows, and wake the waiters."""
+        if frame.restarted:
+            self.history.clear()
+            self.frames.clear()
+        self.history.extend(frame.rows)
+        self.frames.add(frame)
+        with self._changed:
+            self._frame = frame
+            self._changed.notify_all()
+
+    # -- thread ----------------------------------------------------------------------------
+    def start(self) -> LiveSim:
+        if self._thread is None:
+            self._stop.clear()
+            self._thread = threading.Thread(target=self._run, name="live-sim", daemon=True)
+            self._thread.start()
+        return self
+
+    def stop(self, timeout: float = 5.0) -> None:
+        self._stop.set()
+        self._wake.set()
+        if self._thread is not None:
+            self._thread.join(timeout)
+            self._thread = None
+        with self._changed:
+            self._changed.notify_all()
+
+    @property
+    def running(self) -> bool:
+        return self._thread is not None and self._thread.is_alive()
+
+    @property
+    def robots(self):
+        """The loop's robots (tests may read; the loop thread owns them)."""
+        return self.loop.robots
+
+    def _pause_for(self, seconds: float) -> None:
+        """The pacing sleep: returns early when the intent changes or the session stops."""
+        self._wake.wait(seconds)
+        self._wake.clear()
+
+    def _run(self) -> None:
+        try:
+            while not self._stop.is_set():
+                self.loop.iterate()
+        except Exception as exc:  # noqa: BLE001 - keep the web server up; report the cause
+            log.exception("live simulation stopped")
+            self.error = f"{type(exc).__name__}: {exc}"
+        finally:
+            with self._changed:
+                self._changed.notify_all()

@@ -1,0 +1,235 @@
+"""One robot in closed loop: controller + MuJoCo world + what each control period measured.
+
+A :class:`Session` advances one control period per :meth:`Session.tick`: the controller ticks
+from the measured joint angles, the world holds the new servo targets for one period, and a
+:class:`Measurement` records what a robot's sensors and a force plate would report. The
+headless run (``app.runs.run``), the bench and the live tool all step the same ``Session``;
+the live tool differs only in pacing and publishing frames.
+
+Every session owns its whole workspace (MuJoCo model and data, Pinocchio model and data, QP
+solvers), so sessions in different threads or processes never change each other's results.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from app.sim.metrics import Series, two_step_windows
+from app.sim.world import Contacts, World, point_in_polygon, polygon_margin
+from controller.footsteps import FootstepPlan
+from controller.kinematics import RobotKinematics
+from controller.params import ControllerParams
+from controller.walker import TickOutput, Walker
+from models.dyros_jet import ROBOT_XML
+
+GRAVITY = 9.81  # [m/s^2]
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    """What a run needs besides the controller parameters."""
+
+    params: ControllerParams = field(default_factory=ControllerParams)
+    seed: int | None = None
+    perturbation: float = 0.0  # [rad] std of the seeded initial perturbation (arms, base vel)
+    sim_dt: float = 0.001  # [s] MuJoCo timestep
+    backend: str = "daqp"  # QP back-end of every layer (daqp exact / osqp)
+    settle_time: float = 0.3  # [s] after a fall before a headless run stops
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """What one control period measured, at its end (world frame, SI units)."""
+
+    t: float  # [s] time after the period
+    waist_angle: float  # [rad] measured waist yaw at the start of the tick
+    contacts: Contacts  # feet in contact, forces, centre of pressure
+    support: np.ndarray  # (M, 2) [m] support polygon of the feet in contact (CCW)
+    cop_inside: bool | None  # CoP inside the support polygon (None when airborne)
+    balance_margin: float  # [m] CoP to the polygon edge, > 0 inside (nan when airborne)
+    sole_tilt: float  # [rad] largest tilt of a foot in contact (nan when airborne)
+    com: np.ndarray  # (3,) [m]
+    lipm_zmp: np.ndarray  # (2,) [m] ZMP of the LIPM from the measured CoM (paper Fig. 15)
+    yaw_momentum: float  # [kg m^2/s] whole body about the CoM
+    energy: float  # [J] cumulative eq. (44) from 200 Hz samples
+    energy_substep: float  # [J] cumulative eq. (44) from every 1 ms substep
+
+
+class Session:
+    """One robot: world + walker + metrics, advanced one control period per :meth:`tick`.
+
+    Args:
+        cfg: parameters, seed and simulation settings.
+        capacity: rows kept in the time series (default: the whole plan).
+    """
+
+    def __init__(self, cfg: RunConfig, capacity: int | None = None):
+        self.cfg = cfg
+        params = cfg.params.validated()
+        # Its own Pinocchio model and Data: a Data is a mutable workspace, so sessions that
+        # share one in different threads corrupt each other's results (2 ms to build).
+        self.kin = RobotKinematics(ROBOT_XML)
+        self.world = World(cfg.sim_dt, params.control_dt)
+        self.world.reset(cfg.seed, cfg.perturbation)
+        q0 = self.world.keyframe_joints()
+        self.walker = Walker(
+            params, self.kin, q0, self.world.base_position(), backend=cfg.backend,
+            clock=time.perf_counter,
+        )
+        n_ticks = int(math.ceil(self.walker.plan.t_end / params.control_dt)) + 10
+        self.series = Series(capacity or n_ticks)
+        self.fell = False
+        self.fall_time: float | None = None
+        self.fall_reason: str | None = None
+        self.landings: dict[int, float] = {}  # step index -> landing error [m]
+        # step index -> cumulative energy per joint at its start: (200 Hz, substep) [J]
+        self.energy_at_step_start: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self.zmp_ticks = 0
+        self.zmp_inside = 0
+        self.speed_limited_ticks = 0
+        self.last: TickOutput | None = None
+        self.measured: Measurement | None = None
+        self._com_vel_prev: np.ndarray | None = None
+        self.wall_time = 0.0
+
+    @property
+    def params(self) -> ControllerParams:
+        return self.walker.params
+
+    @property
+    def plan(self) -> FootstepPlan:
+        return self.walker.plan
+
+    @property
+    def t(self) -> float:
+        return self.walker.t
+
+    @property
+    def done(self) -> bool:
+        return self.fell or self.walker.finished
+
+    def push(self, force_xy: np.ndarray, duration: float) -> None:
+        """A horizontal push [N] on the torso for ``duration`` [s] from the next period."""
+        self.world.push(force_xy, duration)
+
+    def tick(self) -> TickOutput:
+        """Controller tick from the measured state, then one control period of simulation."""
+        w, world = self.walker, self.world
+        wall0 = time.perf_counter()
+        q_meas = world.q_joints()
+        t0 = time.perf_counter()
+        out = w.tick(q_meas)
+        tick_ms = (time.perf_counter() - t0) * 1e3
+        world.step(out.q_target)
+        m = self._measure(float(q_meas[0]))
+        self._record(out, m, tick_ms)
+        self._bookkeep(out, m)
+        self.last, self.measured = out, m
+        self.wall_time += time.perf_counter() - wall0
+        return out
+
+    # -- measurement -------------------------------------------------------------------------
+    def _measure(self, waist_angle: float) -> Measurement:
+        world = self.world
+        contacts = world.contacts()
+        com = world.com()
+        vel = world.data.subtree_linvel[world.root_id][:2].copy()
+        acc = (np.zeros(2) if self._com_vel_prev is None
+               else (vel - self._com_vel_prev) / world.control_dt)
+        self._com_vel_prev = vel
+        support = world.support_polygon(contacts.in_contact)
+        if contacts.cop is None:
+            inside, margin, tilt = None, math.nan, math.nan
+        else:
+            inside = point_in_polygon(contacts.cop, support)
+            margin = polygon_margin(contacts.cop, support)
+            tilt = float(np.max(world.sole_tilts()[contacts.in_contact]))
+        return Measurement(
+            t=self.walker.t, waist_angle=waist_angle, contacts=contacts, support=support,
+            cop_inside=inside, balance_margin=margin, sole_tilt=tilt, com=com,
+            lipm_zmp=com[:2] - (com[2] / GRAVITY) * acc, yaw_momentum=world.yaw_momentum(),
+            energy=float(world.energy_ctrl_per_joint.sum()),
+            energy_substep=float(world.energy_substep_per_joint.sum()),
+        )
+
+    def _record(self, out: TickOutput, m: Measurement, tick_ms: float) -> None:
+        """One row of the time series (columns: app.sim.metrics.COLUMNS)."""
+        s = self.series
+        row = s.new_row()
+        ix = s.index
+        cop = m.contacts.cop
+        values = {
+            "t": m.t, "waist_angle": m.waist_angle, "waist_angle_cmd": out.waist_angle,
+            "waist_rate": out.waist_rate, "theta_ref": out.theta_ref[0],
+            "yaw_momentum": m.yaw_momentum, "h_low": out.h_low, "h_up": out.h_up,
+            "kappa": out.kappa, "kappa_legs": out.kappa_legs,
+            "cop_x": cop[0] if cop is not None else math.nan,
+            "cop_y": cop[1] if cop is not None else math.nan,
+            "zmp_in_support": math.nan if m.cop_inside is None else float(m.cop_inside),
+            "balance_margin": m.balance_margin, "sole_tilt": m.sole_tilt,
+            "zmp_ref_x": out.zmp_ref[0], "zmp_ref_y": out.zmp_ref[1],
+            "lipm_zmp_x": m.lipm_zmp[0], "lipm_zmp_y": m.lipm_zmp[1],
+            "com_x": m.com[0], "com_y": m.com[1], "com_z": m.com[2],
+            "com_des_x": out.p_world_com_des[0], "com_des_y": out.p_world_com_des[1],
+            "reach_left": out.reach[0], "reach_right": out.reach[1],
+            "energy": m.energy, "energy_substep": m.energy_substep, "tick_ms": tick_ms,
+            "step_index": out.step_index, "in_ssp": float(out.in_ssp),
+            "speed_limited": float(out.speed_limited),
+        }
+        for name, value in values.items():
+            row[ix[name]] = value
+        s.append(row)
+
+    def _bookkeep(self, out: TickOutput, m: Measurement) -> None:
+        """Step starts (energy), landing errors, falls, ZMP and speed-limit counts."""
+        world, plan = self.world, self.walker.plan
+        if out.speed_limited:
+            self.speed_limited_ticks += 1
+        if m.cop_inside is not None and not self.fell:
+            self.zmp_ticks += 1
+            self.zmp_inside += int(m.cop_inside)
+        k, n = out.step_index, plan.n
+        if 0 <= k < n and k not in self.energy_at_step_start and not self.fell:
+            self.energy_at_step_start[k] = (
+                world.energy_ctrl_per_joint.copy(), world.energy_substep_per_joint.copy()
+            )
+        # Landing error half a DSP after each touch-down, relative to the support foot
+        # (per-step timing: a replan changes the timing of later steps only).
+        j = len(self.landings)  # landings are recorded in order
+        if j < n and not self.fell:
+            next_dsp = plan.step_dsp[j + 1] if j + 1 < n else plan.final_dsp_time
+            if m.t >= plan.landing_times()[j] + 0.5 * next_dsp:
+                soles = world.sole_positions()
+                side = int(plan.swing_side[j])
+                landed = soles[side, :2] - soles[1 - side, :2]
+                planned = plan.swing_to[j, :2] - plan.support_pos[j, :2]
+                self.landings[j] = float(np.linalg.norm(landed - planned))
+        if not self.fell:  # SPEC section 4
+            reason = world.fall_reason()
+            if reason is None and m.contacts.other_contact:
+                reason = "a body other than the feet touched the floor"
+            if reason is not None:
+                self.fell, self.fall_time, self.fall_reason = True, m.t, reason
+
+    # -- derived figures ---------------------------------------------------------------------
+    def energy_windows(self, substep: bool = False) -> np.ndarray:
+        """Energy per two-step window [J] (eq. 44), per joint: (windows, joints).
+
+        Windows start at step 1: step 0 starts from standing and moves the foot one step
+        length, later swings two; the last window closes at the start of the closing step.
+        The live plots and Table 1 both read this.
+        """
+        n_walk = self.walker.plan.n_walking_steps
+        starts = [self.energy_at_step_start[k][int(substep)] for k in range(1, n_walk + 1)
+                  if k in self.energy_at_step_start]
+        return two_step_windows(np.array(starts))
+
+    def summary(self) -> dict:
+        """The keys of ``simulate --json`` (INTERFACES.md) and extras: app.sim.summary."""
+        from app.sim.summary import summarize
+
+        return summarize(self)

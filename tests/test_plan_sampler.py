@@ -1,0 +1,123 @@
+"""The plan's one sampler against a slow, written-out reference at random times.
+
+The reference below walks the step list one instant at a time in plain Python, from the
+definitions in the docstrings of controller/footsteps.py and controller/swing.py (it shares
+no code with the sampler), so any shortcut the vectorised sampler takes is checked.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from controller.footsteps import LEFT, RIGHT, FootstepPlan, plan_footsteps
+from controller.params import WalkParams
+from models.dyros_jet import FOOT_SIZE
+
+
+def reference(plan: FootstepPlan, t: float, margin: float) -> dict:
+    """The plan at one instant, step by step (slow, obvious)."""
+    t = min(max(t, 0.0), plan.t_end)
+    n = len(plan.step_start)
+    end_last = plan.step_start[-1] + plan.step_duration[-1]
+    k = -1
+    for j in range(n):
+        if plan.step_start[j] <= t:
+            k = j
+    if t >= end_last:
+        k = n
+    feet = [list(plan.feet_init[LEFT]), list(plan.feet_init[RIGHT])]
+    vel = [[0.0] * 3, [0.0] * 3]
+    out = {"step": k, "standing": k < 0 or k >= n}
+    if k < 0:
+        mid = (plan.feet_init[:, :2].sum(axis=0) / 2).tolist()
+        zmp, ground = mid, [feet[LEFT], feet[RIGHT]]
+        out.update(in_dsp=False, in_ssp=False, swing_side=-1, s_ssp=0.0)
+    elif k >= n:
+        feet = [list(plan.feet_final[LEFT]), list(plan.feet_final[RIGHT])]
+        last = plan.support_pos[-1, :2]
+        mid = plan.feet_final[:, :2].sum(axis=0) / 2
+        a = min(max((t - end_last) / max(plan.final_dsp_time, 1e-9), 0.0), 1.0)
+        zmp, ground = (last + a * (mid - last)).tolist(), [feet[LEFT], feet[RIGHT]]
+        out.update(in_dsp=False, in_ssp=False, swing_side=-1, s_ssp=1.0)
+    else:
+        tau = t - plan.step_start[k]
+        dsp, dur = plan.step_dsp[k], plan.step_duration[k]
+        side = int(plan.swing_side[k])
+        support = list(plan.support_pos[k])
+        in_ssp = tau >= dsp
+        s = min(max((tau - dsp) / max(dur - dsp, 1e-9), 0.0), 1.0)
+        p0, p1, h = plan.swing_from[k], plan.swing_to[k], plan.step_height[k]
+        ssp = max(dur - dsp, 1e-9)
+        if s <= 0.0:
+            sw, vsw = list(p0), [0.0] * 3
+        elif s >= 1.0:
+            sw, vsw = list(p1), [0.0] * 3
+        else:
+            c = 3 * s**2 - 2 * s**3
+            dc = (6 * s - 6 * s**2) / ssp
+            sw = [p0[i] + (p1[i] - p0[i]) * c for i in range(3)]
+            vsw = [(p1[i] - p0[i]) * dc for i in range(3)]
+            sw[2] += h * (1 - math.cos(2 * math.pi * s)) / 2
+            vsw[2] += h * math.pi * math.sin(2 * math.pi * s) / ssp
+        feet[side], vel[side] = sw, vsw
+        feet[1 - side], vel[1 - side] = support, [0.0] * 3
+        a = min(max(tau / max(dsp, 1e-9), 0.0), 1.0)
+        zf = plan.zmp_from[k, :2]
+        zmp = [zf[i] + a * (support[i] - zf[i]) for i in range(2)]
+        ground = [support] if in_ssp else [support, list(p0)]
+        out.update(in_dsp=not in_ssp, in_ssp=in_ssp, swing_side=side, s_ssp=s)
+    hx, hy = max(FOOT_SIZE[0] / 2 - margin, 0), max(FOOT_SIZE[1] / 2 - margin, 0)
+    out["zmp_lo"] = [min(g[0] for g in ground) - hx, min(g[1] for g in ground) - hy]
+    out["zmp_hi"] = [max(g[0] for g in ground) + hx, max(g[1] for g in ground) + hy]
+    out.update(zmp_ref=zmp, p_left=feet[LEFT], p_right=feet[RIGHT], v_left=vel[LEFT],
+               v_right=vel[RIGHT])
+    return out
+
+
+def _plans() -> list[FootstepPlan]:
+    base = plan_footsteps(WalkParams(step_length=0.3, dsp_ratio=0.25, n_steps=5))
+    other = WalkParams(step_length=0.15, step_time=0.9, dsp_ratio=0.1, foot_height=0.1,
+                       n_steps=7)
+    return [
+        base,
+        plan_footsteps(WalkParams(step_length=0.42, step_time=1.4, n_steps=3), first_swing=RIGHT,
+                       x0=0.7),
+        base.replanned(other, base.step_start[2] + 0.3),  # per-step timings differ
+    ]
+
+
+@pytest.mark.parametrize("which", range(3))
+def test_sampler_matches_the_reference_at_random_times(which):
+    plan = _plans()[which]
+    rng = np.random.default_rng(which)
+    times = np.concatenate([
+        rng.uniform(-0.5, plan.t_end + 0.5, 400),
+        plan.step_start, plan.liftoff_times(), plan.landing_times(),  # the phase boundaries
+        [0.0, plan.t_end, plan.walk_end],
+    ])
+    margin = 0.015
+    got = plan.sample(times, margin)
+    for i, t in enumerate(times):
+        ref = reference(plan, float(t), margin)
+        for key, want in ref.items():
+            have = getattr(got, key)[i]
+            if isinstance(want, bool):
+                assert bool(have) == want, (key, t)
+            elif isinstance(want, int):
+                assert int(have) == want, (key, t)
+            else:
+                np.testing.assert_allclose(have, want, atol=1e-12, err_msg=f"{key} at t={t}")
+    np.testing.assert_array_equal(got.support_side[got.swing_side >= 0],
+                                  1 - got.swing_side[got.swing_side >= 0])
+
+
+def test_a_scalar_time_gives_one_row():
+    plan = _plans()[0]
+    one = plan.sample(1.234, 0.02)
+    many = plan.sample(np.array([1.234]), 0.02)
+    for a, b in zip(one, many, strict=True):
+        np.testing.assert_array_equal(a, b)
+        assert len(a) == 1

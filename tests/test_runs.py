@@ -1,0 +1,69 @@
+"""Headless runs are independent of whatever else runs in the process."""
+
+from __future__ import annotations
+
+import math
+import threading
+
+from app.runs import RunConfig, run
+from app.web.live import LiveSim
+from controller.params import ControllerParams
+
+TIMING_KEYS = {"wall_time", "realtime_factor", "tick_ms_median", "tick_ms_p99"}
+
+
+def _same(a, b, path="summary") -> None:
+    """Equal to 1e-9 (numbers), recursively."""
+    if isinstance(a, dict):
+        assert set(a) == set(b), path
+        for k in a:
+            if k not in TIMING_KEYS:
+                _same(a[k], b[k], f"{path}.{k}")
+    elif isinstance(a, (list, tuple)):
+        assert len(a) == len(b), path
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            _same(x, y, f"{path}[{i}]")
+    elif isinstance(a, float) and isinstance(b, float) and math.isfinite(a):
+        assert abs(a - b) <= 1e-9 * max(1.0, abs(a)), (path, a, b)
+    else:
+        assert a == b, (path, a, b)
+
+
+def test_a_headless_run_beside_a_live_session_gives_the_same_summary():
+    params = ControllerParams().replace(method="mpc", walk={"step_length": 0.3, "n_steps": 4})
+    cfg = RunConfig(params=params, seed=1, perturbation=0.01)
+    alone = run(cfg).summary()
+
+    # Three live robots ticking as fast as they can in another thread (no pacing sleeps).
+    live = LiveSim(ControllerParams().replace(walk={"step_length": 0.3, "n_steps": 6}),
+                   methods=["fixed", "redundancy", "mpc"], sleep=lambda _s: None)
+    live.start()
+    try:
+        first = live.wait_frame(timeout=30)
+        assert first is not None
+        beside = run(cfg).summary()
+        last = live.wait_frame(first.seq, timeout=30)
+        assert last is not None and last.clock > first.clock + 1.0  # the live robots walked
+    finally:
+        live.stop()
+    assert live.error is None
+    _same(alone, beside)
+
+
+def test_runs_in_threads_at_once_match_a_run_alone():
+    params = ControllerParams().replace(method="redundancy", walk={"step_length": 0.25,
+                                                                    "n_steps": 3})
+    cfg = RunConfig(params=params)
+    alone = run(cfg).summary()
+    out: list[dict] = [{}, {}]
+
+    def work(i: int) -> None:
+        out[i] = run(cfg).summary()
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
+    for th in threads:
+        th.start()
+    for th in threads:
+        th.join()
+    for s in out:
+        _same(alone, s)
