@@ -1,4 +1,7 @@
-"""The study: definitions as data (fast) and one ``--quick`` run end to end (slow)."""
+"""The study: definitions as data (fast) and one ``--quick`` run end to end (slow).
+
+The claims' verdict rules are tested on synthetic results in ``test_claims.py``.
+"""
 
 import json
 import math
@@ -7,14 +10,16 @@ import pytest
 
 from app.experiments.definitions import (
     FULL,
-    PAPER_TABLE1,
     QUICK,
     RunSpec,
+    Study,
     planned_runs,
     refinement_runs,
     sweep_bracket,
 )
 from app.experiments.figures import FIGURES
+from app.experiments.paper import TABLE1
+from app.experiments.verdicts import VERDICTS
 
 SECTIONS = (
     "kinematics",
@@ -33,9 +38,10 @@ SECTIONS = (
 
 
 def test_paper_table1_copied():
-    assert PAPER_TABLE1["mpc"][0.40] == (412.34, 34.15)
-    assert PAPER_TABLE1["redundancy"][0.15] == (12.79, 3.04)
-    assert PAPER_TABLE1["fixed"][0.35] is None and PAPER_TABLE1["fixed"][0.40] is None
+    assert TABLE1["mpc"][0.40] == (412.34, 34.15)
+    assert TABLE1["redundancy"][0.15] == (12.79, 3.04)
+    assert TABLE1["fixed"][0.35] is None and TABLE1["fixed"][0.40] is None
+    assert FULL.energy_lengths == tuple(TABLE1["mpc"])
 
 
 def test_shared_runs_are_deduplicated():
@@ -50,14 +56,54 @@ def test_shared_runs_are_deduplicated():
 
 def test_sweep_bracket_and_refinement():
     clean = {0.30: True, 0.35: True, 0.40: False, 0.45: True}
-    assert sweep_bracket(FULL, clean) == (0.35, 0.40)
+    assert sweep_bracket(clean) == (0.35, 0.40)
     req = refinement_runs(FULL, {"fixed": clean, "mpc": {0.40: True, 0.45: False}})
     fixed = sorted(s.step_length for s in req if s.method == "fixed")
     assert fixed == [0.36, 0.37, 0.38, 0.39]
     assert RunSpec("mpc", 0.37, FULL.n_steps) in req  # the fixed pelvis's limit, every method
     assert RunSpec("mpc", 0.41, FULL.n_steps) in req
-    assert sweep_bracket(FULL, {0.3: False}) == (None, 0.3)
+    assert sweep_bracket({0.3: False}) == (None, 0.3)
     assert refinement_runs(FULL, {"fixed": {0.3: False}}) == {}
+
+
+def test_run_spec_keys_are_stable():
+    assert RunSpec("mpc", 0.3, 10).key == "mpc_L0.300_n10_arms_s-"
+    assert RunSpec("fixed", 0.15, 20, True, 3).key == "fixed_L0.150_n20_arms_s3"
+    assert RunSpec("redundancy", 0.4, 6, False).key == "redundancy_L0.400_n6_noarms_s-"
+
+
+def test_run_spec_overrides_any_parameter():
+    a = RunSpec("mpc", 0.3, 10, overrides=(("pelvis.k_pel", 0.3), ("walk.dsp_ratio", 0.1)))
+    b = RunSpec("mpc", 0.3, 10, overrides=(("walk.dsp_ratio", 0.1), ("pelvis.k_pel", 0.3)))
+    assert a == b and hash(a) == hash(b) and a != RunSpec("mpc", 0.3, 10)
+    assert a.key == "mpc_L0.300_n10_arms_s-_pelvis.k_pel=0.3_walk.dsp_ratio=0.1"
+    p = a.params()
+    assert (p.method, p.walk.step_length, p.walk.n_steps, p.arms.enabled) == ("mpc", 0.3, 10, True)
+    assert p.pelvis.k_pel == 0.3 and p.walk.dsp_ratio == 0.1
+    assert RunSpec("fixed", 0.2, 4, arms=False).params().arms.enabled is False
+    for bad in (
+        ("pelvis.nope", 1.0),  # no such parameter
+        ("nope.k_pel", 1.0),  # no such group
+        ("walk.step_length", 0.3),  # a field of the spec itself
+    ):
+        with pytest.raises(ValueError):
+            RunSpec("mpc", 0.3, 10, overrides=(bad,))
+    with pytest.raises(ValueError):  # out of its range: checked by ControllerParams
+        RunSpec("mpc", 0.3, 10, overrides=(("pelvis.k_pel", 5.0),)).params()
+    study = Study("sweep", 4, 1, (0.3,), 0.05, (0.3,), 1, 4, overrides=(("pelvis.k_pel", 0.3),))
+    assert all(s.overrides == (("pelvis.k_pel", 0.3),) for s in planned_runs(study))
+
+
+def _check_tables(markdown: str) -> None:
+    """Every row of every table has its header's number of cells (a "|" in a cell escaped)."""
+    width = None
+    for line in markdown.splitlines():
+        if not line.startswith("|"):
+            width = None
+            continue
+        cells = line.replace("\\|", "").count("|")
+        width = width or cells
+        assert cells == width, line
 
 
 def _finite(x):
@@ -85,19 +131,16 @@ def test_quick_study(tmp_path):
     for case in data["waist"]["cases"].values():
         assert _finite(case["peak_abs_angle_deg"]) and _finite(case["peak_abs_rate_deg_s"])
     for case in data["yaw_momentum"]["cases"].values():
-        assert _finite(case["peak_arms"]) and _finite(case["peak_no_arms"])
+        assert _finite(case["arms"]["peak"]) and _finite(case["no_arms"]["peak"])
     cell = data["energy"]["table"]["mpc"][f"{QUICK.energy_lengths[0]:.2f}"]
     assert _finite(cell["mean"]) and _finite(cell["std"]) and cell["n_windows"] > 0
     assert _finite(data["kappa"]["cases"]["mpc@0.30"]["kappa_landing_median"])
     z = data["zmp"]
     assert z["available"] and 0.0 <= z["cop_in_measured_support_walking"] <= 1.0
-    assert {c["verdict"] for c in data["claims"]} <= {
-        "holds",
-        "partly",
-        "does not hold",
-        "not measured",
-    }
+    assert {c["verdict"] for c in data["claims"]} <= set(VERDICTS)
     assert len(data["claims"]) >= 10
+    _check_tables(report)
+    assert "peak \\|d rate/dt\\|" in report
     for name in FIGURES:
         png = tmp_path / "figures" / f"{name}.png"
         assert png.exists() and png.stat().st_size > 10_000, name

@@ -1,105 +1,100 @@
-"""The study, as data: which runs each section needs, and the paper's numbers beside ours.
+"""The study, as data: which runs each section needs.
 
-A run is a :class:`RunSpec` (method, step length, steps, arm swing, seed). Sections ask for
-runs with the *extracts* they need from each (a summary always; ``"step"``: one mid-walk step
-at full rate; ``"walk"``: the walking phase down-sampled; ``"zmp"``: ZMP and CoM paths with the
-footholds). The runner merges the requests, so a run shared between sections runs once and
-carries the union of the extracts.
+A run is a :class:`RunSpec`: method, step length, steps, arm swing, seed, and any other
+parameter of ``controller/params.py`` as ``("group.name", value)`` overrides (a parameter sweep
+varies those). Sections ask for runs with the *extracts* they need from each (a summary always;
+``"step"``: one mid-walk step at full rate; ``"walk"``: the walking phase down-sampled;
+``"zmp"``: ZMP and CoM paths with the footholds). The runner merges the requests, so a run
+shared between sections runs once and carries the union of the extracts.
 
 The sweep of the longest clean step (section 2) is adaptive: a coarse grid first
 (:attr:`Study.sweep_grid`), then :func:`refinement_runs` fills the gap between each method's
 last clean and first failed length at :attr:`Study.sweep_resolution`.
 
-Paper numbers are copied from Park & Park (IEEE Access 2022), :data:`PAPER_CITATION`; the
-section, table or figure they come from is named beside each.
+The paper's numbers are in :mod:`app.experiments.paper`; the lengths the paper's figures and
+Table 1 use come from there.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
+from typing import Any
 
-from controller.params import METHODS
+from app.experiments import paper
+from controller.params import GROUPS, METHODS, ControllerParams
 
-PAPER_CITATION = (
-    'B. Park and J. Park, "Optimization of Pelvic Rotation Walking Pattern Considering Future '
-    'States Using Model Predictive Control to Increase the Step Length", IEEE Access, 2022, '
-    "doi:10.1109/ACCESS.2022.3169886"
-)
-METHOD_LABELS = {
-    "fixed": "fixed pelvis (W/O rotation)",
-    "redundancy": "rotation by redundancy [21]",
-    "mpc": "rotation by MPC (proposed)",
-}
 ROTATING = ("redundancy", "mpc")
-
-# -- the paper's numbers ----------------------------------------------------------------------
-# Sec. II, eq. (1)-(5): l_leg 0.75, z0 0.68, l_pel 0.21, w_step 0.243, theta 45 deg.
-PAPER_ROBOT = {"l_leg": 0.75, "z0": 0.68, "l_pel": 0.21, "w_step": 0.243, "theta_pel_deg": 45.0}
-PAPER_KINEMATICS = {"step_max_fixed": 0.31, "step_max_rotation": 0.42, "increase_percent": 35.0}
-# Sec. VI-B: longest step walked in simulation [m].
-PAPER_MAX_STEP = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
-# Sec. VI-C, Fig. 9(a): MPC waist angle from -22 to +22 deg over a 0.4 m step.
-PAPER_WAIST_PEAK_DEG_040 = 22.0
-# Sec. VI-F, Fig. 16 (experiment): arm swing cuts the yaw angular momentum by up to 60 %.
-PAPER_ARM_REDUCTION_PERCENT = 60.0
-# Sec. VI-E, Fig. 13: at 0.30 m kappa(J) of the fixed pelvis at landing is about twice the
-# rotating methods'; at 0.35 m it diverges for the fixed pelvis.
-PAPER_KAPPA_RATIO_030 = 2.0
-
-# Table 1: energy during two steps [J] (the paper's header says "Mean (W)"; eq. (44) is an
-# energy), mean and standard deviation over 100 windows (10 runs x 20 steps); None = "—"
-# (the method could not walk that step length).
-TABLE1_LENGTHS = (0.15, 0.20, 0.25, 0.30, 0.35, 0.40)
-PAPER_TABLE1: dict[str, dict[float, tuple[float, float] | None]] = {
-    "fixed": {
-        0.15: (14.78, 2.89),
-        0.20: (19.11, 5.55),
-        0.25: (19.76, 10.23),
-        0.30: (50.16, 22.32),
-        0.35: None,
-        0.40: None,
-    },
-    "redundancy": {
-        0.15: (12.79, 3.04),
-        0.20: (18.17, 6.12),
-        0.25: (27.14, 9.16),
-        0.30: (60.49, 28.55),
-        0.35: (411.25, 208.41),
-        0.40: (941.32, 597.6),
-    },
-    "mpc": {
-        0.15: (10.06, 0.87),
-        0.20: (16.92, 3.31),
-        0.25: (26.53, 2.57),
-        0.30: (157.92, 9.73),
-        0.35: (309.64, 32.51),
-        0.40: (412.34, 34.15),
-    },
-}
-
-# -- runs ---------------------------------------------------------------------------------------
 EXTRACTS = ("step", "walk", "zmp")
+SEED_PERTURBATION = 0.01  # [rad] std of the seeded initial perturbation of a repeat
+# Parameters a RunSpec sets through its own fields; an override may not set them again.
+_OWN_FIELDS = ("walk.step_length", "walk.n_steps", "arms.enabled")
+
+Override = tuple[str, Any]  # ("group.name", value), e.g. ("pelvis.k_pel", 0.3)
 
 
-@dataclass(frozen=True, order=True)
+def _check_override(name: str, value: Any) -> None:
+    group, _, fname = name.partition(".")
+    if group not in GROUPS:
+        raise ValueError(f"override {name!r}: the group must be one of {', '.join(GROUPS)}")
+    names = {f.name for f in dataclasses.fields(getattr(ControllerParams(), group))}
+    if fname not in names:
+        raise ValueError(f"override {name!r}: {group} has no parameter {fname!r}")
+    if name in _OWN_FIELDS:
+        raise ValueError(f"override {name!r}: set it with the RunSpec's own field")
+    try:
+        hash(value)  # the spec is a dict key
+    except TypeError:
+        raise ValueError(f"override {name!r}: {value!r} is not a single value") from None
+
+
+@dataclass(frozen=True)
 class RunSpec:
-    """One closed-loop run; repeats differ by ``seed`` (perturbation 0.01 when seeded)."""
+    """One closed-loop run; repeats differ by ``seed`` (perturbation 0.01 rad when seeded).
+
+    ``overrides`` sets any other parameter of :class:`ControllerParams`, as ``("group.name",
+    value)`` pairs (kept sorted by name, so equal specs compare and hash equal).
+    """
 
     method: str
     step_length: float  # [m]
     n_steps: int
     arms: bool = True
     seed: int | None = None
+    overrides: tuple[Override, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        for name, value in self.overrides:
+            _check_override(name, value)
+        names = [name for name, _ in self.overrides]
+        if len(set(names)) != len(names):
+            raise ValueError(f"an override is given twice: {names}")
+        object.__setattr__(self, "overrides", tuple(sorted(self.overrides, key=lambda o: o[0])))
 
     @property
     def perturbation(self) -> float:
-        return 0.01 if self.seed is not None else 0.0
+        return SEED_PERTURBATION if self.seed is not None else 0.0
 
     @property
     def key(self) -> str:
+        """A readable, stable name: ``mpc_L0.300_n10_arms_s-`` (+ ``_pelvis.k_pel=0.3`` ...)."""
         arms = "arms" if self.arms else "noarms"
         seed = "-" if self.seed is None else str(self.seed)
-        return f"{self.method}_L{self.step_length:.3f}_n{self.n_steps}_{arms}_s{seed}"
+        extra = "".join(f"_{name}={value}" for name, value in self.overrides)
+        return f"{self.method}_L{self.step_length:.3f}_n{self.n_steps}_{arms}_s{seed}{extra}"
+
+    def params(self) -> ControllerParams:
+        """The controller's parameters of this run (defaults, the fields, then the overrides)."""
+        groups: dict[str, dict[str, Any]] = {
+            "walk": {"step_length": self.step_length, "n_steps": self.n_steps},
+            "arms": {"enabled": self.arms},
+        }
+        for name, value in self.overrides:
+            group, _, fname = name.partition(".")
+            groups.setdefault(group, {})[fname] = value
+        return ControllerParams().replace(method=self.method, **groups)
 
 
 def length(x: float) -> float:
@@ -116,23 +111,28 @@ class Study:
     mid_step: int  # the step index shown in the one-step figures
     sweep_grid: tuple[float, ...]  # coarse step lengths [m]
     sweep_resolution: float  # [m]
-    figure_lengths: tuple[float, ...]  # waist (Fig. 8-9) and yaw momentum (Fig. 12)
-    kappa_lengths: tuple[float, ...]  # Fig. 13
-    zmp_length: float  # Fig. 15
     energy_lengths: tuple[float, ...]  # Table 1
     energy_repeats: int
     energy_steps: int
+    figure_lengths: tuple[float, ...] = paper.FIGURE_LENGTHS  # waist, yaw momentum
+    kappa_lengths: tuple[float, ...] = paper.KAPPA_LENGTHS  # Fig. 13
+    zmp_length: float = paper.ZMP_LENGTH  # Fig. 15
     methods: tuple[str, ...] = field(default=METHODS)
+    overrides: tuple[Override, ...] = ()  # applied to every run (a sweep's cell)
 
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
         """The unseeded run every figure section shares at one (method, length)."""
-        return RunSpec(method, length(step_length), self.n_steps, arms)
+        return RunSpec(method, length(step_length), self.n_steps, arms, None, self.overrides)
 
     def energy_runs(self, method: str, step_length: float) -> list[RunSpec]:
         return [
-            RunSpec(method, length(step_length), self.energy_steps, True, seed)
+            RunSpec(method, length(step_length), self.energy_steps, True, seed, self.overrides)
             for seed in range(self.energy_repeats)
         ]
+
+    def is_figure_run(self, spec: RunSpec) -> bool:
+        """Whether ``spec`` is the figure run of its (method, length), arms on."""
+        return spec == self.figure_run(spec.method, spec.step_length)
 
 
 FULL = Study(
@@ -141,12 +141,9 @@ FULL = Study(
     mid_step=4,
     sweep_grid=tuple(length(0.10 + 0.05 * i) for i in range(11)),  # 0.10 .. 0.60
     sweep_resolution=0.01,
-    figure_lengths=(0.30, 0.40),
-    kappa_lengths=(0.30, 0.35, 0.40),
-    zmp_length=0.30,
-    energy_lengths=TABLE1_LENGTHS,
-    energy_repeats=10,
-    energy_steps=20,
+    energy_lengths=paper.TABLE1_LENGTHS,
+    energy_repeats=paper.TABLE1_RUNS,
+    energy_steps=paper.TABLE1_STEPS,
 )
 QUICK = Study(
     name="quick",
@@ -154,9 +151,6 @@ QUICK = Study(
     mid_step=2,
     sweep_grid=(0.30, 0.40, 0.50),
     sweep_resolution=0.05,
-    figure_lengths=(0.30, 0.40),
-    kappa_lengths=(0.30, 0.35, 0.40),
-    zmp_length=0.30,
     energy_lengths=(0.15, 0.30, 0.40),
     energy_repeats=2,
     energy_steps=6,
@@ -192,11 +186,11 @@ def planned_runs(study: Study) -> Requests:
     return req
 
 
-def sweep_bracket(study: Study, clean: dict[float, bool]) -> tuple[float | None, float | None]:
-    """(last clean, first failed) coarse lengths of one method; None where there is none.
+def sweep_bracket(clean: dict[float, bool]) -> tuple[float | None, float | None]:
+    """(last clean, first failed) lengths of one method; None where there is none.
 
-    ``clean`` maps each coarse length to the run's ``clean`` flag. The first failure is the
-    shortest length that is not clean; the last clean is the longest clean length below it.
+    ``clean`` maps each length to the run's ``clean`` flag. The first failure is the shortest
+    length that is not clean; the last clean is the longest clean length below it.
     """
     grid = sorted(clean)
     failed = [x for x in grid if not clean[x]]
@@ -207,7 +201,7 @@ def sweep_bracket(study: Study, clean: dict[float, bool]) -> tuple[float | None,
 
 def refinement_lengths(study: Study, clean: dict[float, bool]) -> list[float]:
     """Lengths strictly between one method's last clean and first failed coarse length."""
-    lo, hi = sweep_bracket(study, clean)
+    lo, hi = sweep_bracket(clean)
     if lo is None or hi is None:
         return []
     n = int(round((hi - lo) / study.sweep_resolution))

@@ -1,0 +1,253 @@
+"""Our side of each claim: the numbers a claim's rule reads, measured from the typed results.
+
+Each function takes the :class:`Study` and the :class:`StudyResults` (sections 1-7, claims not
+yet judged) and returns the measured numbers as a dict, or None when the runs the claim needs
+are missing ("not measured"). :data:`app.experiments.claims.CLAIMS` names the function of each
+claim; NaN or None in a number fails any bound on it.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from app.experiments import paper
+from app.experiments.definitions import ROTATING, Study
+from app.experiments.results import EnergyCell, StudyResults, case_key, length_key
+from app.experiments.sections import significant
+
+Measured = dict[str, Any] | None  # None: the runs a claim needs are missing
+LONG = max(paper.FIGURE_LENGTHS)  # [m] the long step of Fig. 8-9 and 12
+
+
+def kinematics(study: Study, r: StudyResults) -> Measured:
+    p, o, k = r.kinematics.paper_inputs, r.kinematics.ours, paper.KINEMATICS
+    return dict(
+        error=max(
+            abs(p["step_max_fixed_static"] - k.step_max_fixed),
+            abs(p["step_max_rotation_static"] - k.step_max_rotation),
+        ),
+        **{
+            f"{who}_{key}": d[f"step_max_{key}_static"]
+            for who, d in (("p", p), ("o", o))
+            for key in ("fixed", "rotation")
+        },
+        p_inc=p["increase_percent"],
+        o_inc=o["increase_percent"],
+    )
+
+
+def max_step(study: Study, r: StudyResults) -> Measured:
+    f, red, m = (r.max_step[k].longest_clean for k in ("fixed", "redundancy", "mpc"))
+    if f is None or m is None:
+        return None
+    red_text = "None" if red is None else format(red, ".2f")
+    return dict(fixed=f, redundancy=red_text, mpc=m, increase=100.0 * (m / f - 1.0))
+
+
+def _waist_pair(r: StudyResults) -> tuple[Any, Any]:
+    cases = r.waist.cases
+    return cases.get(case_key("mpc", LONG)), cases.get(case_key("redundancy", LONG))
+
+
+def waist_amplitude(study: Study, r: StudyResults) -> Measured:
+    c = r.waist.cases.get(case_key("mpc", paper.WAIST_PEAK_LENGTH))
+    if not c:
+        return None
+    return dict(
+        peak=c.peak_abs_angle_deg,
+        error=abs(c.peak_abs_angle_deg - paper.WAIST_PEAK_DEG),
+        angle_min=c.angle_min_deg,
+        angle_max=c.angle_max_deg,
+    )
+
+
+def waist_turns(study: Study, r: StudyResults) -> Measured:
+    mpc, red = _waist_pair(r)
+    if not (mpc and red):
+        return None
+    red_lead, red_rate = red.reversal_before_liftoff_s, red.rate_at_liftoff_toward_swing_deg_s
+    return dict(
+        length=LONG,
+        mpc_lead=mpc.reversal_before_liftoff_s,
+        mpc_rate=mpc.rate_at_liftoff_toward_swing_deg_s,
+        red_after=-red_lead,
+        red_rate=red_rate,
+        red_early=bool(red_lead > 0 and red_rate > 0),
+        mpc_dsp=mpc.dsp_change_deg,
+        red_dsp=red.dsp_change_deg,
+    )
+
+
+def waist_sharp(study: Study, r: StudyResults) -> Measured:
+    mpc, red = _waist_pair(r)
+    if not (mpc and red):
+        return None
+    return dict(
+        length=LONG,
+        red_acc=red.peak_abs_rate_change_deg_s2,
+        mpc_acc=mpc.peak_abs_rate_change_deg_s2,
+        ratio=red.peak_abs_rate_change_deg_s2 / max(mpc.peak_abs_rate_change_deg_s2, 1e-9),
+        red_rate=red.peak_abs_rate_deg_s,
+        mpc_rate=mpc.peak_abs_rate_deg_s,
+    )
+
+
+def arm_swing(study: Study, r: StudyResults) -> Measured:
+    ok = [
+        c
+        for c in r.yaw_momentum.cases.values()
+        if c.peak_reduction_percent is not None and not c.arms.fell and not c.no_arms.fell
+    ]
+    if not ok:
+        return None
+    best = max(ok, key=lambda c: c.peak_reduction_percent)
+    worst = min(ok, key=lambda c: c.peak_reduction_percent)
+    return dict(
+        best=best.peak_reduction_percent,
+        best_case=f"{best.method}, {best.step_length} m",
+        worst=worst.peak_reduction_percent,
+        worst_case=f"{worst.method}, {worst.step_length} m",
+    )
+
+
+def yaw_redundancy_higher(study: Study, r: StudyResults) -> Measured:
+    red = r.yaw_momentum.cases.get(case_key("redundancy", LONG))
+    mpc = r.yaw_momentum.cases.get(case_key("mpc", LONG))
+    if not (red and mpc and red.no_arms.peak and mpc.no_arms.peak):
+        return None
+    return dict(
+        red=red.no_arms.peak, mpc=mpc.no_arms.peak, excess=red.no_arms.peak - mpc.no_arms.peak
+    )
+
+
+def _vs(a: EnergyCell, b: EnergyCell) -> str:
+    """ "a vs b J", with "(n.s.)" when the means differ by less than twice their standard error."""
+    return f"{a.mean:.1f} vs {b.mean:.1f} J" + ("" if significant(a, b) else " (n.s.)")
+
+
+def _wins(wins: int, n: int, details: str) -> dict[str, Any]:
+    return dict(wins=wins, n=n, share=wins / n, details=details)
+
+
+def _mpc_redundancy(
+    r: StudyResults, lengths: list[float]
+) -> list[tuple[float, EnergyCell, EnergyCell]]:
+    pairs = [(x, r.energy.cell("mpc", x), r.energy.cell("redundancy", x)) for x in lengths]
+    return [(x, a, b) for x, a, b in pairs if a and b]
+
+
+def energy_std(study: Study, r: StudyResults) -> Measured:
+    pairs = _mpc_redundancy(r, r.energy.lengths)
+    if not pairs:
+        return None
+    details = ", ".join(f"{x:.2f}: {a.std:.1f} vs {b.std:.1f} J" for x, a, b in pairs)
+    return _wins(sum(a.std < b.std for _, a, b in pairs), len(pairs), details)
+
+
+def energy_std_gap(study: Study, r: StudyResults) -> Measured:
+    pairs = _mpc_redundancy(r, r.energy.lengths)
+    gaps = [b.std - a.std for _, a, b in pairs]
+    if len(gaps) < 3:
+        return None
+    rho = float(np.corrcoef(np.argsort(np.argsort(gaps)), np.arange(len(gaps)))[0, 1])
+    details = ", ".join(f"{x:.2f}: {g:+.1f} J" for (x, _, _), g in zip(pairs, gaps, strict=True))
+    return dict(rho=rho, change=gaps[-1] - gaps[0], details=details)
+
+
+def energy_mean_long(study: Study, r: StudyResults) -> Measured:
+    lengths = [x for x in paper.ENERGY_MPC_BELOW_REDUNDANCY if x in r.energy.lengths]
+    pairs = _mpc_redundancy(r, lengths)
+    if not pairs:
+        return None
+    details = ", ".join(f"{x:.2f}: {_vs(a, b)}" for x, a, b in pairs)
+    return _wins(sum(a.mean < b.mean for _, a, b in pairs), len(pairs), details)
+
+
+def energy_vs_fixed(
+    lo: float, hi: float, cheaper: bool
+) -> Callable[[Study, StudyResults], Measured]:
+    """Rotating methods' means against the fixed pelvis's at lengths in (lo, hi]."""
+
+    def measure(study: Study, r: StudyResults) -> Measured:
+        checks = []
+        for x in (x for x in r.energy.lengths if lo + 1e-9 < x <= hi + 1e-9):
+            f = r.energy.cell("fixed", x)
+            for m in ROTATING:
+                c = r.energy.cell(m, x)
+                if f and c:
+                    checks.append((x, m, c, f))
+        if not checks:
+            return None
+        details = "; ".join(f"{x:.2f} {m}: {_vs(c, f)}" for x, m, c, f in checks)
+        return _wins(
+            sum((c.mean < f.mean) == cheaper for _, _, c, f in checks), len(checks), details
+        )
+
+    return measure
+
+
+def _kappa_ratio_at(r: StudyResults, x: float | None) -> Measured:
+    row = r.kappa.landing_ratio_fixed_over.get(length_key(x), {}) if x is not None else {}
+    if not row.get("mpc"):
+        return None
+    return dict(length=x, ratio=row["mpc"], ratio_redundancy=row.get("redundancy", float("nan")))
+
+
+def own_limit_differs(study: Study, r: StudyResults) -> bool:
+    lc = r.max_step["fixed"].longest_clean
+    return lc is not None and abs(lc - paper.MAX_STEP["fixed"]) > 1e-9
+
+
+def kappa_diverges(study: Study, r: StudyResults) -> Measured:
+    f = r.kappa.cases.get(case_key("fixed", paper.KAPPA_DIVERGES_LENGTH))
+    m = r.kappa.cases.get(case_key("mpc", paper.KAPPA_DIVERGES_LENGTH))
+    if not (f and m):
+        return None
+    return dict(
+        fixed_max=f.kappa_run_max,
+        mpc_max=m.kappa_run_max,
+        fixed_clean=f.clean,
+        ratio=f.kappa_run_max / m.kappa_run_max,
+        status="clean" if f.clean else "not clean: " + "; ".join(f.reasons),
+    )
+
+
+def kappa_own_limit(study: Study, r: StudyResults) -> Measured:
+    lc, ff = r.max_step["fixed"].longest_clean, r.max_step["fixed"].first_failed
+    if lc is None or ff is None:
+        return None
+    near = r.kappa.near_limit_cases
+    a, b = near.get(case_key("fixed", lc)), near.get(case_key("fixed", ff))
+    c = near.get(case_key("mpc", ff))
+    if not (a and b and c):
+        return None
+    return dict(
+        lc=lc,
+        ff=ff,
+        fixed_at_limit=a.kappa_run_max,
+        fixed_past=b.kappa_run_max,
+        mpc_past=c.kappa_run_max,
+        growth=b.kappa_run_max / a.kappa_run_max,
+        mpc_over_fixed=c.kappa_run_max / b.kappa_run_max,
+    )
+
+
+def zmp(study: Study, r: StudyResults) -> Measured:
+    z = r.zmp
+    if not z.available:
+        return None
+    cop, lipm = z.cop_in_measured_support_walking, z.lipm_in_planned_support_walking
+    return dict(cop=cop, lipm=lipm, cop_percent=cop * 100, lipm_percent=lipm * 100)
+
+
+def kappa_ratio_paper_length(study: Study, r: StudyResults) -> Measured:
+    """Fixed / rotating kappa(J) at landing at the paper's length."""
+    return _kappa_ratio_at(r, paper.KAPPA_RATIO_LENGTH)
+
+
+def kappa_ratio_own_limit(study: Study, r: StudyResults) -> Measured:
+    """Fixed / rotating kappa(J) at landing at our fixed pelvis's longest clean step."""
+    return _kappa_ratio_at(r, r.max_step["fixed"].longest_clean)
