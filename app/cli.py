@@ -11,9 +11,11 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import NoReturn
 
-from controller.params import METHODS, ControllerParams
+from app.params_cli import add_param_options, params_from_args
+from app.sweep.cli import add_sweep_arguments
+from controller.params import METHODS
 
 
 class _Parser(argparse.ArgumentParser):
@@ -58,15 +60,19 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--host", default=None)
     p.add_argument("--port", type=_port, default=None)
     p.add_argument("--viser-port", type=_port, default=None)
+    p.add_argument(
+        "--report-dir",
+        type=Path,
+        default=None,
+        help="the report /report shows (default: the latest `experiments --out`)",
+    )
 
-    p = sub.add_parser("simulate", help="one headless closed-loop MuJoCo run")
+    p = sub.add_parser(
+        "simulate", help="one headless closed-loop MuJoCo run",
+        description="One headless closed-loop run. Every parameter of controller/params.py "
+        "has an option (or use --set GROUP.NAME=VALUE).")
     p.add_argument("--method", choices=METHODS, required=True)
-    p.add_argument("--step-length", type=_finite, required=True, help="[m]")
-    p.add_argument("--step-time", type=_finite, default=None, help="[s]")
-    p.add_argument("--dsp-ratio", type=_finite, default=None, help="double-support share")
-    p.add_argument("--steps", type=_positive_int, default=10)
-    p.add_argument("--horizon", type=_finite, default=None, help="MPC horizon [s]")
-    p.add_argument("--no-arms", action="store_true", help="switch the arm swing off")
+    add_param_options(p, required={"walk.step_length"})
     p.add_argument("--seed", type=int, default=None)
     p.add_argument("--backend", choices=("osqp", "daqp"), default="daqp")
     p.add_argument("--json", type=Path, default=None, help="write the summary here")
@@ -80,33 +86,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true")
     p.add_argument("--jobs", type=_positive_int, default=None)
 
+    p = sub.add_parser("sweep", help="a parameter grid over methods (process pool or Ray)")
+    add_sweep_arguments(p)
+
     p = sub.add_parser("bench", help="performance figures")
     p.add_argument("--json", type=Path, default=None)
     p.add_argument("--ticks", type=_positive_int, default=600)
     return parser
 
 
-def params_from_args(args: argparse.Namespace) -> ControllerParams:
-    """Controller parameters from ``simulate``'s options; ValueError on a bad value."""
-    base = ControllerParams()
-    walk: dict[str, Any] = {"step_length": args.step_length, "n_steps": args.steps}
-    if args.step_time is not None:
-        walk["step_time"] = args.step_time
-    if args.dsp_ratio is not None:
-        walk["dsp_ratio"] = args.dsp_ratio
-    com: dict[str, Any] = {}
-    if args.horizon is not None:
-        com["horizon"] = args.horizon
-    return base.replace(
-        method=args.method, walk=walk, com=com, arms={"enabled": not args.no_arms}
-    )
-
-
 def _simulate(args: argparse.Namespace) -> int:
     from app.runs import RunConfig, run
 
     try:
-        params = params_from_args(args)
+        params = params_from_args(args, method=args.method)
     except ValueError as exc:  # bad parameter values: one line, exit 2, nothing started
         print(f"pelvic-walk simulate: error: {exc}", file=sys.stderr)
         return 2
@@ -177,11 +170,15 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "serve":
             from app.web.server import serve
 
-            return serve(args.host, args.port, args.viser_port)
+            return serve(args.host, args.port, args.viser_port, args.report_dir)
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main
 
             return experiments_main(args.out, quick=args.quick, jobs=args.jobs)
+        if args.command == "sweep":
+            from app.sweep import sweep_main
+
+            return sweep_main(args)
         if args.command == "bench":
             from app.bench import main as bench_main
 

@@ -1,8 +1,14 @@
 """Every tunable of the controller: frozen dataclasses with units, defaults and ranges.
 
-This module is the single source of truth for parameters. The CLI's argument checks, the
-HTTP API's Pydantic models and the GUI sliders all read the ``min``/``max``/``step``/``unit``
-metadata attached to each field with :func:`spec`, so a new gain added here appears everywhere.
+This module is the single source of truth for parameters. The CLI's options (``simulate``,
+``sweep``), the HTTP API's Pydantic models, the GUI's folders and sliders and the study's run
+specs all read the metadata attached to each field with :func:`spec`, so a new gain added
+here appears everywhere. Metadata keys: ``min``, ``max``, ``step``, ``unit``, ``label``
+(always); ``lo_open`` (the minimum itself is excluded); ``log`` (a weight spanning decades:
+log-scale slider from ``log_min``); ``paper`` (the paper's value, marked on the slider);
+``applies`` ("tick": the next control tick, the default; "step": from the next step, as the
+footstep plan is re-planned); ``cli`` (the command-line option, without ``--``; default
+``group-name``); ``choices`` (a text parameter's values); ``help`` (one line of explanation).
 
 Paper symbols -> names (Park & Park 2022):
     l_step -> WalkParams.step_length, w_step -> WalkParams.step_width,
@@ -58,17 +64,33 @@ def _f(default: float, lo: float, hi: float, step: float, unit: str, label: str,
     return field(default=default, metadata=meta)
 
 
+def _choice(default: str, choices: tuple[str, ...], label: str, **kw: Any) -> Any:
+    """A text field taking one of ``choices``."""
+    return field(default=default, metadata={"choices": choices, "label": label, **kw})
+
+
+def _w(default: float, lo: float, hi: float, label: str, log_min: float, **kw: Any) -> Any:
+    """A QP weight: a float spanning decades, shown on a log-scale slider from ``log_min``."""
+    return _f(default, lo, hi, log_min, "", label, log=True, log_min=log_min, **kw)
+
+
 @dataclass(frozen=True)
 class WalkParams:
     """Footstep plan and swing-foot shape (layer 1, eq. 20-21)."""
 
-    step_length: float = _f(0.2, 0.01, 0.6, 0.01, "m", "Step length", lo_open=True)
-    step_time: float = _f(1.2, 0.6, 2.0, 0.05, "s", "Step time")
-    dsp_ratio: float = _f(0.2, 0.05, 0.5, 0.01, "", "Double-support share")
-    foot_height: float = _f(0.06, 0.0, 0.15, 0.005, "m", "Foot lift height")
-    step_width: float = _f(0.243, 0.18, 0.35, 0.001, "m", "Step width (feet lateral distance)")
+    step_length: float = _f(0.2, 0.01, 0.6, 0.01, "m", "Step length", lo_open=True,
+                            applies="step", cli="step-length")
+    step_time: float = _f(1.2, 0.6, 2.0, 0.05, "s", "Step time", applies="step",
+                          cli="step-time", paper=1.2)
+    dsp_ratio: float = _f(0.2, 0.05, 0.5, 0.01, "", "Double-support share", applies="step",
+                          cli="dsp-ratio")
+    foot_height: float = _f(0.06, 0.0, 0.15, 0.005, "m", "Foot lift height", applies="step",
+                            cli="foot-height")
+    step_width: float = _f(0.243, 0.18, 0.35, 0.001, "m", "Step width (feet lateral distance)",
+                           applies="step", cli="step-width", paper=0.243)
     n_steps: int = field(
-        default=10, metadata={"min": 1, "max": 200, "step": 1, "unit": "", "label": "Steps"}
+        default=10, metadata={"min": 1, "max": 200, "step": 1, "unit": "", "label": "Steps",
+                              "applies": "step", "cli": "steps", "gui": False}
     )
 
 
@@ -76,11 +98,13 @@ class WalkParams:
 class ComMpcParams:
     """CoM MPC of eq. (10)-(18) and the pelvis tracking of eq. (19)."""
 
-    horizon: float = _f(1.6, 0.2, 3.0, 0.1, "s", "Horizon H")
+    horizon: float = _f(1.6, 0.2, 3.0, 0.1, "s", "Horizon H", cli="horizon", paper=1.6,
+                        help="both MPCs look this far ahead; shorter than a step, they cannot "
+                        "see the next support foot")
     sample_time: float = _f(0.1, 0.02, 0.2, 0.01, "s", "MPC sample T_p")
-    alpha: float = _f(1.0, 0.0, 100.0, 0.1, "", "alpha (ZMP tracking)")
-    beta: float = _f(1e-3, 0.0, 10.0, 1e-4, "", "beta (CoM velocity fluctuation)")
-    gamma: float = _f(1e-6, 1e-9, 1.0, 1e-6, "", "gamma (jerk)")
+    alpha: float = _w(1.0, 0.0, 100.0, "alpha (ZMP tracking)", 1e-3, paper=1.0)
+    beta: float = _w(1e-3, 0.0, 10.0, "beta (CoM velocity fluctuation)", 1e-6)
+    gamma: float = _w(1e-6, 1e-9, 1.0, "gamma (jerk)", 1e-9)
     zmp_margin: float = _f(0.02, 0.0, 0.06, 0.005, "m", "ZMP margin inside the foot")
     pelvis_gain: float = _f(0.3, 0.0, 1.0, 0.01, "", "K_p (eq. 19)")
 
@@ -89,9 +113,10 @@ class ComMpcParams:
 class PelvisMpcParams:
     """Reference pelvic angle (eq. 27-33) and pelvic-rotation MPC (eq. 34-38)."""
 
-    k_pel: float = _f(0.25, 0.0, 1.0, 0.01, "", "k_pel (eq. 31-32)")
-    alpha: float = _f(1.0, 0.0, 100.0, 0.1, "", "alpha_pel (tracking)")
-    beta: float = _f(1e-6, 1e-10, 1.0, 1e-6, "", "beta_pel (yaw acceleration)")
+    k_pel: float = _f(0.25, 0.0, 1.0, 0.01, "", "k_pel (eq. 31-32)",
+                      help="share of the step made by turning the pelvis")
+    alpha: float = _w(1.0, 0.0, 100.0, "alpha_pel (tracking)", 1e-3, paper=1.0)
+    beta: float = _w(1e-6, 1e-10, 1.0, "beta_pel (yaw acceleration)", 1e-10, paper=1e-10)
     angle_limit_deg: float = _f(45.0, 0.0, 50.0, 1.0, "deg", "Pelvic angle limit")
     acc_limit: float = _f(30.0, 1.0, 100.0, 1.0, "rad/s^2", "Yaw acceleration limit")
 
@@ -101,7 +126,7 @@ class IkParams:
     """QP inverse kinematics, eq. (39)-(40)."""
 
     foot_gain: float = _f(20.0, 0.0, 200.0, 1.0, "1/s", "Foot pose error gain")
-    damping: float = _f(1e-4, 0.0, 1.0, 1e-4, "", "Joint-velocity damping")
+    damping: float = _w(1e-4, 0.0, 1.0, "Joint-velocity damping", 1e-8)
     joint_speed_limit: float = _f(10.0, 1.0, 30.0, 0.5, "rad/s", "Joint speed limit")
     redundancy_weight: float = _f(0.05, 0.0, 10.0, 0.01, "", "Redundancy: waist-yaw pull to 0")
 
@@ -110,10 +135,10 @@ class IkParams:
 class ArmParams:
     """Arm swing QP on the centroidal momentum matrix, eq. (41)-(43)."""
 
-    enabled: bool = field(default=True, metadata={"label": "Arm swing"})
-    omega1: float = _f(1.0, 0.0, 100.0, 0.1, "", "omega1 (yaw momentum)")
-    omega2: float = _f(1e-2, 0.0, 10.0, 1e-3, "", "omega2 (initial pose)")
-    omega3: float = _f(1e-4, 0.0, 1.0, 1e-4, "", "omega3 (joint rate)")
+    enabled: bool = field(default=True, metadata={"label": "Arm swing", "cli": "arms"})
+    omega1: float = _w(1.0, 0.0, 100.0, "omega1 (yaw momentum)", 1e-3, paper=1.0)
+    omega2: float = _w(1e-2, 0.0, 10.0, "omega2 (initial pose)", 1e-5, paper=1e-2)
+    omega3: float = _w(1e-4, 0.0, 1.0, "omega3 (joint rate)", 1e-7, paper=1e-4)
 
 
 @dataclass(frozen=True)
@@ -145,6 +170,8 @@ class ControllerParams:
 
 
 GROUPS: tuple[str, ...] = ("walk", "com", "pelvis", "ik", "arms")
+GROUP_TITLES = {"walk": "Walk", "com": "CoM MPC", "pelvis": "Pelvic MPC", "ik": "QP IK",
+                "arms": "Arm swing"}
 
 
 def spec(cls_or_obj: Any) -> dict[str, dict[str, Any]]:
@@ -162,6 +189,10 @@ def spec(cls_or_obj: Any) -> dict[str, dict[str, Any]]:
 def check_value(group: str, name: str, value: Any, meta: dict[str, Any]) -> None:
     """Raise ValueError with a one-line message if ``value`` is outside its range."""
     where = f"{group}.{name}" if group else name
+    if meta.get("choices"):
+        if value not in meta["choices"]:
+            raise ValueError(f"{where} must be one of {', '.join(meta['choices'])}, got {value!r}")
+        return
     if meta.get("type") == "bool":
         if not isinstance(value, bool):
             raise ValueError(f"{where} must be true or false, got {value!r}")

@@ -13,7 +13,9 @@ Two back-ends:
 - ``"daqp"``: DAQP, an exact dual active-set solver for small dense QPs. One ``daqp.Model``
   per solver: set up once (Cholesky factor of P, constraint matrix), then each tick only the
   vectors are updated and the last active set is the warm start; P or A are refactored only
-  when the layer hands over a different matrix.
+  when they change. (Answering with the unconstrained optimum -P^-1 q when it is feasible,
+  which it is on most ticks, was tried: in numpy it costs more instructions than DAQP's warm
+  start, 4.57 vs 4.32 M per closed-loop tick under callgrind.)
 
 Constant matrices are tracked by *identity*, and only read-only ones: a layer that keeps P or
 A constant freezes it once per parameter change (:func:`frozen`) and passes the same array

@@ -7,9 +7,9 @@ import time
 import pytest
 from fastapi.testclient import TestClient
 
+from app.live import LiveSim
 from app.runs import SUMMARY_KEYS
 from app.web.api import create_app
-from app.web.live import LiveSim
 from controller.params import ControllerParams
 
 DT = ControllerParams().control_dt
@@ -144,7 +144,7 @@ def test_pause_holds_time_and_step_advances_one_period(client, live):
     r = client.post("/api/sim/pause")
     assert r.status_code == 200 and r.json()["paused"] is True
     t = [b["t"] for b in _state(client)["robots"]]
-    _wait_newer(live, 4)
+    assert live.wait_frame(live.frame().seq, timeout=0.3) is None  # nothing new while paused
     state = _state(client)
     assert state["paused"] is True
     assert [b["t"] for b in state["robots"]] == t
@@ -179,9 +179,21 @@ def test_state_reports_every_robot(client):
     assert state["paused"] is False
     assert [b["method"] for b in state["robots"]] == ["fixed", "mpc"]
     for b in state["robots"]:
-        assert set(b) >= {"method", "t", "step_index", "step_length", "fell", "success",
-                          "waist_angle_deg", "kappa", "yaw_momentum", "zmp_ref",
-                          "zmp_measured", "solver_failures", "reach"}
+        assert set(b) >= {
+            "method",
+            "t",
+            "step_index",
+            "step_length",
+            "fell",
+            "success",
+            "waist_angle_deg",
+            "kappa",
+            "yaw_momentum",
+            "zmp_ref",
+            "zmp_measured",
+            "solver_failures",
+            "reach",
+        }
 
 
 def test_headless_run_returns_the_simulate_summary(client):
@@ -243,7 +255,7 @@ def test_run_manager_is_bounded():
     """More than max_pending queued runs are refused (429 at the API), old records pruned."""
     import threading
 
-    from app.web.api import RunBusy, RunManager
+    from app.web.api.runs import RunBusy, RunManager
     from controller.params import ControllerParams
 
     params = ControllerParams()
@@ -264,3 +276,190 @@ def test_run_manager_is_bounded():
     manager.submit(params, None)
     assert len(manager._runs) == 3
     manager.shutdown()
+
+
+# -- bodies that are not JSON ---------------------------------------------------------------
+BODY_ROUTES = [("PUT", "/api/params"), ("POST", "/api/runs"), ("PUT", "/api/sim/speed")]
+NOT_JSON = {
+    "text/plain": {"content-type": "text/plain"},
+    "form": {"content-type": "application/x-www-form-urlencoded"},
+    "multipart": {"content-type": "multipart/form-data; boundary=x"},
+    "no content type": {},
+}
+
+
+@pytest.mark.parametrize("headers", NOT_JSON.values(), ids=NOT_JSON.keys())
+@pytest.mark.parametrize(("method", "path"), BODY_ROUTES)
+def test_a_body_that_is_not_json_gets_415(client, live, method, path, headers):
+    before = client.get("/api/params").json()
+    r = client.request(method, path, content=b'{"walk": {"step_length": 0.3}}', headers=headers)
+    assert r.status_code == 415, r.text
+    detail = r.json()["detail"]
+    assert isinstance(detail, str) and "\n" not in detail and "application/json" in detail
+    assert client.get("/api/params").json() == before
+    _assert_still_running(client, live)
+
+
+MALFORMED = {
+    "truncated": b'{"walk": {"step_length": 0.3}',
+    "not JSON at all": b"step_length=0.3",
+    "not UTF-8": b'{"walk": {"step_length": "\xff"}}',
+    "nested too deeply": b"[" * 100_000 + b"]" * 100_000,
+}
+
+
+@pytest.mark.parametrize("body", MALFORMED.values(), ids=MALFORMED.keys())
+@pytest.mark.parametrize(("method", "path"), BODY_ROUTES)
+def test_malformed_json_gets_422_with_a_message(client, method, path, body):
+    r = client.request(method, path, content=body, headers={"content-type": "application/json"})
+    assert r.status_code == 422, r.text
+    assert r.json()["detail"].startswith("body is not valid JSON: ")
+    assert r.json()["errors"][0]["type"] == "json_invalid"
+
+
+def test_json_media_types_and_bodiless_routes_are_accepted(client):
+    for ctype in ("application/json; charset=utf-8", "application/merge-patch+json"):
+        r = client.put("/api/params", content=b"{}", headers={"content-type": ctype})
+        assert r.status_code == 200, r.text
+    r = client.post("/api/sim/resume", content=b"ignored", headers={"content-type": "text/plain"})
+    assert r.status_code == 200  # a route without a body ignores one
+    r = client.put("/api/params", content=b"", headers={"content-type": "text/plain"})
+    assert r.status_code == 422  # no body at all: the usual "Field required"
+
+
+# -- docs, page and report from installed packages ------------------------------------------
+def test_docs_assets_are_served_locally(client):
+    page = client.get("/docs")
+    assert page.status_code == 200
+    assert "cdn." not in page.text and "https://" not in page.text
+    for asset in ("swagger-ui-bundle.js", "swagger-ui.css", "favicon.png"):
+        assert f"/docs-assets/{asset}" in page.text
+        r = client.get(f"/docs-assets/{asset}")
+        assert r.status_code == 200 and len(r.content) > 1000
+    redoc = client.get("/redoc")
+    assert redoc.status_code == 200 and "/docs-assets/redoc.standalone.js" in redoc.text
+    assert "https://" not in redoc.text
+    assert client.get("/docs-assets/../pyproject.toml").status_code == 404
+
+
+def test_report_serves_the_latest_experiments_output(live, tmp_path, monkeypatch):
+    from app.report_dir import record_report_dir, reference_report_dir
+
+    monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
+    with TestClient(create_app(live)) as c:
+        reference = c.get("/report").text
+        assert "<table>" in reference and "<img" in reference
+        figure = sorted((reference_report_dir() / "figures").glob("*.png"))[0]
+        assert c.get(f"/report/figures/{figure.name}").content == figure.read_bytes()
+        out = tmp_path / "mine"
+        (out / "figures").mkdir(parents=True)
+        (out / "report.md").write_text("# My study\n\n![fig](figures/a.png)\n")
+        (out / "figures" / "a.png").write_bytes(b"png")
+        record_report_dir(out)
+        page = c.get("/report").text
+        assert "My study" in page and 'src="/report/figures/a.png"' in page
+        assert c.get("/report/figures/a.png").content == b"png"
+
+
+def test_report_dir_option(live, tmp_path, monkeypatch):
+    from app.cli import build_parser
+    from app.web.settings import Settings
+
+    monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
+    (tmp_path / "report.md").write_text("# Chosen report\n")
+    with TestClient(create_app(live, report_dir=tmp_path)) as c:
+        assert "Chosen report" in c.get("/report").text
+    args = build_parser().parse_args(["serve", "--report-dir", str(tmp_path)])
+    assert args.report_dir == tmp_path
+    monkeypatch.setenv("PELVIC_WALK_REPORT_DIR", str(tmp_path))
+    assert Settings().report_dir == tmp_path
+    with TestClient(create_app(live, report_dir=tmp_path / "none")) as c:
+        assert "No report yet" in c.get("/report").text
+
+
+# -- path traversal, with requests that keep their ".." -------------------------------------
+@pytest.fixture(scope="module")
+def raw_server(live, tmp_path_factory):
+    """uvicorn on a free localhost port in a thread, serving a report dir with a secret beside."""
+    import socket
+    import threading
+
+    import uvicorn
+
+    base = tmp_path_factory.mktemp("raw")
+    (base / "secret.txt").write_text("SECRET-CONTENT")
+    report = base / "report"
+    (report / "figures").mkdir(parents=True)
+    (report / "report.md").write_text("# r\n")
+    (report / "figures" / "a.png").write_bytes(b"PNGDATA")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    app = create_app(live, report_dir=report)
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
+    thread = threading.Thread(target=server.run, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 30
+    while not server.started and thread.is_alive() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert server.started, "uvicorn did not start"
+    yield port, report
+    server.should_exit = True
+    thread.join(10)
+    app.state.runs.shutdown()
+
+
+def _raw_get(port: int, target: str) -> tuple[int, bytes]:
+    """GET exactly ``target`` (no client-side normalisation of ``..``)."""
+    import socket
+
+    with socket.create_connection(("127.0.0.1", port), timeout=10) as s:
+        s.sendall(
+            f"GET {target} HTTP/1.1\r\nHost: 127.0.0.1\r\nConnection: close\r\n\r\n".encode(
+                "latin-1"
+            )
+        )
+        data = b""
+        while chunk := s.recv(65536):
+            data += chunk
+    head, _, body = data.partition(b"\r\n\r\n")
+    return int(head.split()[1]), body
+
+
+TRAVERSALS = [
+    "/report/../secret.txt",
+    "/report/..%2fsecret.txt",
+    "/report/..%2f..%2fpyproject.toml",
+    "/report/%2e%2e/secret.txt",
+    "/report/figures/../../secret.txt",
+    "/report/../../../../../../etc/passwd",
+    "/report/%00",
+    "/report/" + "a" * 5000,
+    "/static/../pyproject.toml",
+    "/static/..%2f..%2fpyproject.toml",
+    "/static/../app/web/api.py",
+    "/static/__init__.py",
+]
+
+
+def test_raw_requests_reach_the_files(raw_server):
+    port, _ = raw_server
+    assert _raw_get(port, "/report/figures/a.png") == (200, b"PNGDATA")
+    status, body = _raw_get(port, "/static/index.html")
+    assert status == 200 and b"<html" in body
+
+
+@pytest.mark.parametrize("target", TRAVERSALS)
+def test_path_traversal_gets_404(raw_server, target):
+    port, report = raw_server
+    assert (report / "../secret.txt").resolve().is_file()  # the guard is what stops it
+    status, body = _raw_get(port, target)
+    # The guard's own answer (the router's would be "Not Found"): the request reached it.
+    assert (status, body) == (404, b'{"detail":"not found"}')
+
+
+def test_path_traversal_of_the_docs_assets_gets_404(raw_server):
+    port, _ = raw_server
+    for target in ("/docs-assets/../__init__.py", "/docs-assets/..%2f..%2ffastapi/__init__.py"):
+        status, body = _raw_get(port, target)
+        assert status == 404 and b"import" not in body

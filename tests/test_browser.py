@@ -148,3 +148,28 @@ def test_page_scene_gui_and_step_length_slider(server):
             page.screenshot(path=str(ARTIFACTS / "browser_plots.png"))
         finally:
             browser.close()
+
+
+def test_docs_list_the_operations_without_internet(server):
+    """Swagger UI's scripts come from the installed package: the page renders the operations
+    although Chromium reaches nothing beyond localhost."""
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
+        try:
+            page = browser.new_page(viewport={"width": 1200, "height": 900})
+            outside: list[str] = []
+            page.on(
+                "request",
+                lambda req: outside.append(req.url) if not req.url.startswith(server) else None,
+            )
+            page.goto(server + "/docs")
+            block = page.locator(".opblock", has_text="/api/params").filter(has_text="PUT")
+            block.first.wait_for(state="visible", timeout=30_000)
+            assert page.locator(".opblock-summary-method", has_text="PUT").count() >= 1
+            assert page.get_by_text("/api/params", exact=True).first.is_visible()
+            assert page.locator(".opblock-summary-path").count() >= 10  # every operation
+            assert outside == []
+        finally:
+            browser.close()

@@ -5,8 +5,8 @@ from __future__ import annotations
 import math
 import threading
 
+from app.live import LiveSim
 from app.runs import RunConfig, run
-from app.web.live import LiveSim
 from controller.params import ControllerParams
 
 TIMING_KEYS = {"wall_time", "realtime_factor", "tick_ms_median", "tick_ms_p99"}

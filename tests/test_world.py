@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-import numpy as np
-
 import math
 
+import numpy as np
 import pytest
 
 from app.sim.world import World, convex_hull, point_in_polygon, polygon_margin

@@ -42,45 +42,37 @@ KEEP_S = 40.0  # [s] of frames kept for scrubbing and recording (at least 30 s)
 PLOT_HISTORY_S = 60.0  # [s] of plot rows kept
 
 
-class LiveSim:
-    """One live session run by a thread of this process.
+def initial_intent(params: ControllerParams | None = None,
+                   methods: Sequence[str] = DEFAULT_METHODS, speed: float = 1.0) -> Intent:
+    """A session's first intent (validated)."""
+    params = (params or live_params()).validated()
+    return Intent(params=params, methods=check_methods(methods), speed=check_speed(speed))
+
+
+class SessionView:
+    """The display side of one live session (any thread).
 
     Args:
-        params: the initial parameters (default: :func:`~app.live.loop.live_params`).
-        methods: the robots to show, one per method.
-        speed: playback speed (x real time).
-        clock, sleep: the wall clock and the pacing sleep (tests may pass a no-op sleep to
-            run unpaced; the controller and simulation are always real).
-        keep_s: seconds of frames kept for scrubbing; publish_hz: frames per wall second.
+        intent: the first intent (:func:`initial_intent`).
+        keep_s: seconds of frames kept for scrubbing and recording.
     """
 
-    def __init__(
-        self,
-        params: ControllerParams | None = None,
-        methods: Sequence[str] = DEFAULT_METHODS,
-        speed: float = 1.0,
-        clock: Callable[[], float] = time.perf_counter,
-        sleep: Callable[[float], None] | None = None,
-        keep_s: float = KEEP_S,
-        publish_hz: float = PUBLISH_HZ,
-    ):
-        params = (params or live_params()).validated()
-        self._wake = threading.Event()  # set on every intent change (cuts a pacing sleep)
-        self._box = IntentBox(
-            Intent(params=params, methods=check_methods(methods), speed=check_speed(speed)),
-            on_change=self._wake.set,
-        )
+    def __init__(self, intent: Intent, keep_s: float = KEEP_S):
+        self._box = IntentBox(intent, on_change=self._intent_changed)
         self._changed = threading.Condition()  # notified when a frame arrives
         self._frame: LiveFrame | None = None
         self._shown: float | None = None  # session clock shown while paused (seek)
         self.history = PlotHistory(PLOT_HISTORY_S)
         self.frames = FrameStore(keep_s)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
+        self._closed = threading.Event()
         self.error: str | None = None  # set if the loop itself died
-        self.loop = LiveLoop(self._box.get, self._receive, clock=clock,
-                             sleep=sleep or self._pause_for, idle=self._pause_for,
-                             publish_hz=publish_hz)
+
+    def _intent_changed(self) -> None:
+        """Called after every intent change (the runner forwards or wakes the loop)."""
+
+    @property
+    def running(self) -> bool:
+        raise NotImplementedError
 
     # -- intent (any thread); each returns the new intent, a ticket for wait_applied --------
     @property
@@ -192,12 +184,12 @@ class LiveSim:
                 if f is not None and ok(f):
                     return f
                 left = deadline - time.monotonic()
-                if left <= 0 or self._stop.is_set() or (self._thread and not self.running):
+                if left <= 0 or self._closed.is_set() or not self.running:
                     return None
                 self._changed.wait(left)
 
-    def _receive(self, frame: LiveFrame) -> None:
-        """The loop's publish callback: keep the frame, its rows, and wake the waiters."""
+    def receive(self, frame: LiveFrame) -> None:
+        """A frame from the loop: keep it and its rows, and wake the waiters."""
         if frame.restarted:
             self.history.clear()
             self.frames.clear()
@@ -207,16 +199,49 @@ class LiveSim:
             self._frame = frame
             self._changed.notify_all()
 
-    # -- thread ----------------------------------------------------------------------------
+
+
+class LiveSim(SessionView):
+    """One live session run by a thread of this process.
+
+    Args:
+        params: the initial parameters (default: :func:`~app.live.loop.live_params`).
+        methods: the robots to show, one per method.
+        speed: playback speed (x real time).
+        clock, sleep: the wall clock and the pacing sleep (tests may pass a no-op sleep to
+            run unpaced; the controller and simulation are always real).
+        keep_s: seconds of frames kept for scrubbing; publish_hz: frames per wall second.
+    """
+
+    def __init__(
+        self,
+        params: ControllerParams | None = None,
+        methods: Sequence[str] = DEFAULT_METHODS,
+        speed: float = 1.0,
+        clock: Callable[[], float] = time.perf_counter,
+        sleep: Callable[[float], None] | None = None,
+        keep_s: float = KEEP_S,
+        publish_hz: float = PUBLISH_HZ,
+    ):
+        self._wake = threading.Event()  # set on every intent change (cuts a pacing sleep)
+        super().__init__(initial_intent(params, methods, speed), keep_s)
+        self._thread: threading.Thread | None = None
+        self.loop = LiveLoop(self._box.get, self.receive, clock=clock,
+                             sleep=sleep or self._pause_for, idle=self._pause_for,
+                             publish_hz=publish_hz)
+
+    def _intent_changed(self) -> None:
+        self._wake.set()
+
     def start(self) -> LiveSim:
         if self._thread is None:
-            self._stop.clear()
+            self._closed.clear()
             self._thread = threading.Thread(target=self._run, name="live-sim", daemon=True)
             self._thread.start()
         return self
 
     def stop(self, timeout: float = 5.0) -> None:
-        self._stop.set()
+        self._closed.set()
         self._wake.set()
         if self._thread is not None:
             self._thread.join(timeout)
@@ -240,7 +265,7 @@ class LiveSim:
 
     def _run(self) -> None:
         try:
-            while not self._stop.is_set():
+            while not self._closed.is_set():
                 self.loop.iterate()
         except Exception as exc:  # noqa: BLE001 - keep the web server up; report the cause
             log.exception("live simulation stopped")

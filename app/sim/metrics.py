@@ -59,6 +59,11 @@ class Series:
         self.data[self.count % self.capacity] = row
         self.count += 1
 
+    def append_values(self, values: tuple) -> None:
+        """Append one row given as values in column order."""
+        self.data[self.count % self.capacity] = values
+        self.count += 1
+
     def new_row(self) -> np.ndarray:
         return np.full(len(self.columns), np.nan)
 

@@ -157,32 +157,19 @@ class Session:
         )
 
     def _record(self, out: TickOutput, m: Measurement, tick_ms: float) -> None:
-        """One row of the time series (columns: app.sim.metrics.COLUMNS)."""
-        s = self.series
-        row = s.new_row()
-        ix = s.index
+        """One row of the time series, in the order of app.sim.metrics.COLUMNS."""
         cop = m.contacts.cop
-        values = {
-            "t": m.t, "waist_angle": m.waist_angle, "waist_angle_cmd": out.waist_angle,
-            "waist_rate": out.waist_rate, "theta_ref": out.theta_ref[0],
-            "yaw_momentum": m.yaw_momentum, "h_low": out.h_low, "h_up": out.h_up,
-            "kappa": out.kappa, "kappa_legs": out.kappa_legs,
-            "cop_x": cop[0] if cop is not None else math.nan,
-            "cop_y": cop[1] if cop is not None else math.nan,
-            "zmp_in_support": math.nan if m.cop_inside is None else float(m.cop_inside),
-            "balance_margin": m.balance_margin, "sole_tilt": m.sole_tilt,
-            "zmp_ref_x": out.zmp_ref[0], "zmp_ref_y": out.zmp_ref[1],
-            "lipm_zmp_x": m.lipm_zmp[0], "lipm_zmp_y": m.lipm_zmp[1],
-            "com_x": m.com[0], "com_y": m.com[1], "com_z": m.com[2],
-            "com_des_x": out.p_world_com_des[0], "com_des_y": out.p_world_com_des[1],
-            "reach_left": out.reach[0], "reach_right": out.reach[1],
-            "energy": m.energy, "energy_substep": m.energy_substep, "tick_ms": tick_ms,
-            "step_index": out.step_index, "in_ssp": float(out.in_ssp),
-            "speed_limited": float(out.speed_limited),
-        }
-        for name, value in values.items():
-            row[ix[name]] = value
-        s.append(row)
+        nan = math.nan
+        self.series.append_values((
+            m.t, m.waist_angle, out.waist_angle, out.waist_rate, out.theta_ref[0],
+            m.yaw_momentum, out.h_low, out.h_up, out.kappa, out.kappa_legs,
+            cop[0] if cop is not None else nan, cop[1] if cop is not None else nan,
+            nan if m.cop_inside is None else float(m.cop_inside), m.balance_margin,
+            m.sole_tilt, out.zmp_ref[0], out.zmp_ref[1], m.lipm_zmp[0], m.lipm_zmp[1],
+            m.com[0], m.com[1], m.com[2], out.p_world_com_des[0], out.p_world_com_des[1],
+            out.reach[0], out.reach[1], m.energy, m.energy_substep, tick_ms,
+            out.step_index, float(out.in_ssp), float(out.speed_limited),
+        ))
 
     def _bookkeep(self, out: TickOutput, m: Measurement) -> None:
         """Step starts (energy), landing errors, falls, ZMP and speed-limit counts."""
@@ -226,7 +213,8 @@ class Session:
         n_walk = self.walker.plan.n_walking_steps
         starts = [self.energy_at_step_start[k][int(substep)] for k in range(1, n_walk + 1)
                   if k in self.energy_at_step_start]
-        return two_step_windows(np.array(starts))
+        n_joints = len(self.world.energy_ctrl_per_joint)
+        return two_step_windows(np.array(starts).reshape(len(starts), n_joints))
 
     def summary(self) -> dict:
         """The keys of ``simulate --json`` (INTERFACES.md) and extras: app.sim.summary."""

@@ -1,6 +1,6 @@
 """The live 3-D scene (viser): robots side by side and what each controller layer plans.
 
-Drawing only: every ``draw_*`` helper takes a published :class:`~app.web.live.RobotFrame`
+Drawing only: every ``draw_*`` helper takes a published :class:`~app.live.RobotFrame`
 and updates viser handles; nothing here touches the simulation. The robots themselves are
 drawn by mjviser (:class:`mjviser.ViserMujocoScene`, one batched mesh per body shape and one
 "environment" per robot) from the MuJoCo body poses copied into each frame.

@@ -2,7 +2,7 @@
 
 Three kinds of threads in one process (the machine may have only two cores):
 
-- the **live simulation** thread (:class:`~app.web.live.LiveSim`) ticks the robots;
+- the **live simulation** thread (:class:`~app.live.LiveSim`) ticks the robots;
 - the **display** thread (:class:`LiveView`) reads the latest published frame at
   ``DISPLAY_HZ`` and draws it (scene, plots, GUI reflection); viser's own thread sends it;
 - **uvicorn** serves the page and the HTTP API in the main thread.
@@ -19,12 +19,13 @@ import socket
 import sys
 import threading
 import time
+from pathlib import Path
 
 import viser
 
+from app.live import LiveSim
 from app.web.api import create_app
 from app.web.gui import ControlPanel
-from app.web.live import LiveSim
 from app.web.scene import SceneView
 from app.web.settings import Settings
 
@@ -59,7 +60,7 @@ class LiveView:
             self._thread.join(2.0)
 
     def draw_once(self) -> None:
-        frame = self.live.frame()
+        frame = self.live.shown_frame()
         if frame is not None:
             self.scene.draw(frame)
         self.panel.reflect(frame)
@@ -69,7 +70,7 @@ class LiveView:
         last_seq = -1
         while not self._stop.is_set():
             t0 = time.perf_counter()
-            frame = self.live.frame()
+            frame = self.live.shown_frame()
             try:
                 if frame is None or frame.seq != last_seq or (
                     self.panel._reflected_version != self.live.intent.version
@@ -99,14 +100,24 @@ def _fail(message: str) -> int:
     return 2
 
 
-def serve(host: str | None = None, port: int | None = None, viser_port: int | None = None) -> int:
-    """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port)."""
+def serve(
+    host: str | None = None,
+    port: int | None = None,
+    viser_port: int | None = None,
+    report_dir: Path | None = None,
+) -> int:
+    """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
+
+    ``report_dir``: what ``/report`` shows (default: the latest ``pelvic-walk experiments``
+    output, else the packaged reference report).
+    """
     import uvicorn
 
     settings = Settings()
     host = host or settings.host
     port = port or settings.port
     viser_port = viser_port or settings.viser_port
+    report_dir = report_dir or settings.report_dir
     if port == viser_port:
         return _fail(f"--port and --viser-port must differ (both {port})")
     if not port_free(host, port):
@@ -121,7 +132,7 @@ def serve(host: str | None = None, port: int | None = None, viser_port: int | No
 
     live = LiveSim().start()
     view = LiveView(viser_server, live).start()
-    app = create_app(live, viser_port=viser_port)
+    app = create_app(live, viser_port=viser_port, report_dir=report_dir)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning")
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host

@@ -1,20 +1,31 @@
-"""Host and ports of ``pelvic-walk serve`` (pydantic-settings, env prefix ``PELVIC_WALK_``).
+"""Host, ports and report directory of ``pelvic-walk serve`` (pydantic-settings, env prefix
+``PELVIC_WALK_``).
 
-``PELVIC_WALK_HOST``, ``PELVIC_WALK_PORT`` and ``PELVIC_WALK_VISER_PORT`` override the
-defaults; command-line options override both.
+``PELVIC_WALK_HOST``, ``PELVIC_WALK_PORT``, ``PELVIC_WALK_VISER_PORT`` and
+``PELVIC_WALK_REPORT_DIR`` override the defaults; command-line options override both.
 """
 
 from __future__ import annotations
 
-from pydantic import Field
+from pathlib import Path
+
+from pydantic import Field, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 
 class Settings(BaseSettings):
-    """Where the web tool listens. Bound to localhost unless told otherwise."""
+    """Where the web tool listens (localhost unless told otherwise) and what ``/report`` shows."""
 
     model_config = SettingsConfigDict(env_prefix="PELVIC_WALK_")
 
     host: str = "127.0.0.1"
     port: int = Field(default=8000, ge=1, le=65535)  # FastAPI (page, HTTP API, /docs)
     viser_port: int = Field(default=8080, ge=1, le=65535)  # viser (3-D scene and GUI)
+    # None: the latest `pelvic-walk experiments --out DIR`, else the packaged reference report
+    report_dir: Path | None = None
+
+    @field_validator("report_dir", mode="before")
+    @classmethod
+    def _empty_is_default(cls, value: object) -> object:
+        """``PELVIC_WALK_REPORT_DIR=`` (empty) means the default, not the working directory."""
+        return None if value == "" else value

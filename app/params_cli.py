@@ -1,0 +1,127 @@
+"""Command-line options generated from ``controller/params.py`` (the one source of parameters).
+
+Every field of every parameter group becomes an option of ``simulate`` (its ``cli`` name from
+the field's metadata, else ``--group-name``; a bool becomes ``--name`` / ``--no-name``), and
+``--set GROUP.NAME=VALUE`` (repeatable) reaches any field by its dotted name. ``sweep`` uses the
+same :func:`parse_assignment` for its ``--set GROUP.NAME=V1,V2,...`` grids. Values are
+checked against the field's range when the parameters are built (ValueError, one line).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from collections.abc import Iterable
+from typing import Any
+
+from controller.params import GROUPS, ControllerParams, check_value, spec
+
+
+def fields() -> Iterable[tuple[str, str, dict[str, Any]]]:
+    """(group, name, metadata) of every parameter, in declaration order."""
+    defaults = ControllerParams()
+    for group in GROUPS:
+        for name, meta in spec(getattr(defaults, group)).items():
+            yield group, name, meta
+
+
+def option_name(group: str, name: str, meta: dict[str, Any]) -> str:
+    return meta.get("cli") or f"{group}-{name}".replace("_", "-")
+
+
+def convert(group: str, name: str, text: str, meta: dict[str, Any]) -> Any:
+    """A field's value from text (ValueError with a one-line message)."""
+    where = f"{group}.{name}"
+    kind = meta["type"]
+    if kind == "bool":
+        low = text.strip().lower()
+        if low in ("1", "true", "yes", "on"):
+            return True
+        if low in ("0", "false", "no", "off"):
+            return False
+        raise ValueError(f"{where} must be true or false, got {text!r}")
+    if kind == "str":
+        return text.strip()
+    try:
+        value: Any = int(text) if kind == "int" else float(text)
+    except ValueError:
+        raise ValueError(f"{where} must be a number, got {text!r}") from None
+    if isinstance(value, float) and not math.isfinite(value):
+        raise ValueError(f"{where} must be finite, got {text!r}")
+    return value
+
+
+def _meta_of(dotted: str) -> tuple[str, str, dict[str, Any]]:
+    group, _, name = dotted.partition(".")
+    for g, n, meta in fields():
+        if g == group and n == name:
+            return g, n, meta
+    known = ", ".join(f"{g}.{n}" for g, n, _ in fields())
+    raise ValueError(f"unknown parameter {dotted!r} (one of: {known})")
+
+
+def parse_assignment(text: str, many: bool = False) -> tuple[str, str, Any]:
+    """``GROUP.NAME=VALUE`` (or ``=V1,V2,...`` with ``many``) -> (group, name, value(s)).
+
+    Every value is converted and range-checked; ValueError with one line otherwise.
+    """
+    dotted, sep, rhs = text.partition("=")
+    if not sep or not rhs.strip():
+        raise ValueError(f"expected GROUP.NAME=VALUE, got {text!r}")
+    group, name, meta = _meta_of(dotted.strip())
+    values = [convert(group, name, part, meta) for part in rhs.split(",")] if many else [
+        convert(group, name, rhs, meta)]
+    for v in values:
+        check_value(group, name, v, meta)
+    return group, name, (values if many else values[0])
+
+
+def _number(group: str, name: str, meta: dict[str, Any]):
+    def parse(text: str) -> Any:
+        try:
+            value = convert(group, name, text, meta)
+            check_value(group, name, value, meta)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        return value
+
+    parse.__name__ = meta["type"]  # argparse names the type in its messages
+    return parse
+
+
+def add_param_options(parser: argparse.ArgumentParser, required: Iterable[str] = ()) -> None:
+    """One option per parameter field plus ``--set``; ``required``: dotted names."""
+    required = set(required)
+    for group, name, meta in fields():
+        dest = f"param:{group}.{name}"
+        opt = "--" + option_name(group, name, meta)
+        unit = f" [{meta['unit']}]" if meta.get("unit") else ""
+        if meta["type"] == "bool":
+            parser.add_argument(opt, dest=dest, action=argparse.BooleanOptionalAction,
+                                default=None, help=f"{meta['label']} (default {meta['default']})")
+            continue
+        rng = (f", {meta['min']:g}..{meta['max']:g}" if "min" in meta and "max" in meta
+               else "")
+        choices = f", one of {', '.join(meta['choices'])}" if meta.get("choices") else ""
+        parser.add_argument(
+            opt, dest=dest, type=_number(group, name, meta), default=None,
+            required=f"{group}.{name}" in required, metavar="VALUE" if not choices else "MODE",
+            help=f"{meta['label']}{unit} (default {meta['default']}{rng}{choices})",
+        )
+    parser.add_argument("--set", dest="param_set", action="append", default=[],
+                        metavar="GROUP.NAME=VALUE",
+                        help="any parameter of controller/params.py by its dotted name")
+
+
+def params_from_args(args: argparse.Namespace, base: ControllerParams | None = None,
+                     **top: Any) -> ControllerParams:
+    """The parameters the options ask for, on top of ``base`` (ValueError on a bad value)."""
+    groups: dict[str, dict[str, Any]] = {}
+    for key, value in vars(args).items():
+        if key.startswith("param:") and value is not None:
+            group, name = key[len("param:"):].split(".")
+            groups.setdefault(group, {})[name] = value
+    for text in getattr(args, "param_set", []) or []:
+        group, name, value = parse_assignment(text)
+        groups.setdefault(group, {})[name] = value
+    return (base or ControllerParams()).replace(**top, **groups)

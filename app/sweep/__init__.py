@@ -1,0 +1,22 @@
+"""``pelvic-walk sweep``: a parameter grid over walking methods, run headless in parallel.
+
+Where each thing is:
+
+- ``grid``: the grid from ``--set GROUP.NAME=V1,V2,...`` options or a YAML / JSON file, any
+  field of ``controller/params.py``, checked by ``app.params_cli``; cells = cartesian product.
+- ``measure``: what one (cell, method) computes: ``summary`` (one walk, its summary keys) or
+  ``limit`` (the longest step that walks and the longest that is clean, by bisection); and
+  :func:`~app.sweep.measure.run_one`, one headless run of a ``RunSpec``.
+- ``run``: the backends (local ``spawn`` process pool, Ray, in-process) and the loop that keeps
+  one run in flight per task, with a progress bar on stderr.
+- ``output``: the tidy table (``sweep.csv``, ``sweep.jsonl``), heatmaps / line plots,
+  ``grid.json`` and ``README.md`` in ``--out``.
+- ``cli``: :func:`add_sweep_arguments` and :func:`sweep_main` for ``app.cli``, and
+  :func:`main` for ``python -m app.sweep``.
+
+Importing this package is light (no MuJoCo, matplotlib or Ray until a sweep runs).
+"""
+
+from app.sweep.cli import add_sweep_arguments, main, sweep_main
+
+__all__ = ["add_sweep_arguments", "main", "sweep_main"]

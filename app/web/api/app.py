@@ -1,0 +1,99 @@
+""":func:`create_app`: the FastAPI app around the server's live sessions."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from fastapi import FastAPI
+from fastapi.exceptions import RequestValidationError
+
+from app.live.registry import SessionRegistry
+from app.live.session import SessionView
+from app.report_dir import latest_report_dir
+from app.web.api.edges import finite, router, validation_handler
+from app.web.api.live import session_router
+from app.web.api.pages import mount_docs_assets, pages_router
+from app.web.api.runs import RunManager, runs_router
+from app.web.api.sessions import resolvers, sessions_router
+from controller.params import GROUPS, ControllerParams, spec
+
+
+def create_app(
+    live: SessionView | SessionRegistry,
+    viser_port: int = 8080,
+    runs: RunManager | None = None,
+    report_dir: Path | None = None,
+    health_extra: Callable[[], dict[str, Any]] | None = None,
+) -> FastAPI:
+    """The app around the server's sessions (started and stopped by the caller).
+
+    Args:
+        live: the sessions (a registry), or one session served as the shared one.
+        viser_port: where the page finds the 3-D scene.
+        runs: the headless-run manager (default: a new one).
+        report_dir: what ``/report`` serves; None looks up the latest report that
+            ``pelvic-walk experiments`` wrote at each request.
+        health_extra: more fields for ``GET /api/health`` (e.g. the display's state).
+    """
+    registry = live if isinstance(live, SessionRegistry) else SessionRegistry.around(live)
+    runs = runs or RunManager()
+    app = FastAPI(
+        title="pelvic-walk",
+        description="Humanoid walking with pelvic rotation planned by MPC: the live teaching "
+        "tool's API. The 3-D scene is served by viser on its own port. Session-scoped routes "
+        "act on the shared session unless an `X-Pelvic-Session` header or the "
+        "`/api/sessions/{sid}/...` prefix names another.",
+        version="0.1.0",
+        docs_url=None,  # served by pages_router from local files: the default uses a CDN
+        redoc_url=None,
+    )
+    app.state.registry = registry
+    app.state.live = registry.shared
+    app.state.runs = runs
+    app.state.viser_port = viser_port
+    app.add_exception_handler(RequestValidationError, validation_handler)  # type: ignore[arg-type]
+
+    health = router("/api", "health")
+
+    @health.get("/health")
+    def get_health() -> dict[str, Any]:
+        """``ok`` while every session's loop runs; workers and their deaths, if any."""
+        shared = registry.shared
+        frame = shared.frame()
+        pool = registry.pool
+        deaths = [d.describe() for d in pool.deaths[-5:]] if pool is not None else []
+        workers = pool.workers() if pool is not None else []
+        healthy = shared.running and shared.error is None and all(w["alive"] for w in workers)
+        out = {
+            "status": "ok" if healthy else "degraded",
+            "live_running": shared.running,
+            "live_error": shared.error,
+            "frame_seq": frame.seq if frame else None,
+            "realtime_factor": frame.realtime_factor if frame else None,
+            "viser_port": viser_port,
+            "sessions_mode": registry.mode,
+            "sessions": 1 + registry.count_private(),
+            "workers": workers,
+            "worker_deaths": deaths,
+        }
+        if health_extra is not None:
+            out.update(health_extra())
+        return finite(out)
+
+    @health.get("/params/spec", tags=["params"])
+    def get_params_spec() -> dict[str, Any]:
+        """Ranges, steps, units, defaults and paper values of every parameter
+        (controller/params.py, the one source of them)."""
+        defaults = ControllerParams()
+        return finite({g: spec(getattr(defaults, g)) for g in GROUPS})
+
+    by_header, by_path = resolvers(registry)
+    reports = (lambda: report_dir) if report_dir is not None else latest_report_dir
+    for r in (health, session_router("/api", by_header), sessions_router(registry),
+              session_router("/api/sessions/{sid}", by_path), runs_router(runs),
+              pages_router(app, viser_port, reports)):
+        app.include_router(r)
+    mount_docs_assets(app)
+    return app

@@ -1,0 +1,187 @@
+"""Routes that act on one live session: parameters, playback, state, horizon, seek, push.
+
+Thin: each route writes intent (and waits until the loop has carried it out) or reads the
+frame the displays show. The same routes serve ``/api/...`` (the shared session, or the one
+named by the ``X-Pelvic-Session`` header) and ``/api/sessions/{sid}/...``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+from fastapi import APIRouter, Depends, HTTPException, Query
+
+from app.live.frames import LiveFrame
+from app.live.session import SessionView
+from app.web.api.edges import conflict, finite, router, unprocessable
+from app.web.api.models import (
+    HorizonResponse,
+    ParamsModel,
+    ParamsUpdate,
+    PushRequest,
+    SeekRequest,
+    SpeedRequest,
+    StateResponse,
+    StepRequest,
+    params_dict,
+    updates,
+)
+
+APPLY_TIMEOUT_S = 5.0  # how long a handler waits for the loop to take its intent
+
+
+def _shown(session: SessionView) -> LiveFrame:
+    frame = session.shown_frame() or session.wait_frame(timeout=APPLY_TIMEOUT_S)
+    if frame is None:
+        raise HTTPException(503, detail="the live simulation has not produced a frame yet")
+    return frame
+
+
+def state_of(sid: str, session: SessionView) -> dict[str, Any]:
+    """``GET /api/state``: the shown frame of every robot, the clock and what is kept."""
+    frame = _shown(session)
+    span = session.frames.span()
+    robots = [{
+        "method": r.method, "t": r.t, "step_index": r.step_index, "in_dsp": r.in_dsp,
+        "step_length": r.step_length, "status": r.status, "fell": r.fell,
+        "fall_reason": r.fall_reason, "waiting": r.waiting, "success": r.last_walk_success,
+        "walks_completed": r.walks_completed, "falls": r.falls,
+        "waist_angle_deg": math.degrees(r.waist_angle), "kappa": r.kappa,
+        "yaw_momentum": r.yaw_momentum, "reach": r.reach,
+        "zmp_ref": r.zmp_ref, "zmp_measured": r.cop, "pushing": r.pushing,
+        "solver_failures": r.solver_failures, "params": dict(vars(r.params.walk)),
+    } for r in frame.robots]
+    return finite({
+        "session": sid, "seq": frame.seq, "clock": frame.clock, "shown_t": session.shown_clock,
+        "kept": {"start": span[0] if span else None, "end": span[1] if span else None,
+                 "frames": len(session.frames),
+                 "megabytes": round(session.frames.nbytes() / 1e6, 2)},
+        "paused": frame.paused, "speed": frame.speed, "realtime_factor": frame.realtime_factor,
+        "compute_realtime_factor": frame.compute_realtime_factor, "robots": robots,
+    })
+
+
+def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
+    """``GET /api/horizon``: one robot's plan over the horizon at the shown instant."""
+    frame = _shown(session)
+    shown = [r.method for r in frame.robots]
+    robot = frame.robot(method) if method else (frame.robot("mpc") or frame.robots[0])
+    if robot is None:
+        raise unprocessable(f"no robot {method!r} is shown (robots: {', '.join(shown)})")
+    h = robot.horizon
+    if h is None:
+        raise conflict("the robot has not ticked since it (re)started: resume or step first")
+    deg = 180.0 / math.pi
+    return finite({
+        "session": sid, "method": robot.method, "clock": frame.clock, "t": h.t,
+        "com_x": h.com[:, 0], "com_y": h.com[:, 1], "zmp_x": h.zmp[:, 0], "zmp_y": h.zmp[:, 1],
+        "zmp_ref_x": h.zmp_ref[:, 0], "zmp_ref_y": h.zmp_ref[:, 1],
+        "zmp_min_x": h.zmp_lo[:, 0], "zmp_max_x": h.zmp_hi[:, 0],
+        "zmp_min_y": h.zmp_lo[:, 1], "zmp_max_y": h.zmp_hi[:, 1],
+        "left_foot_x": h.left_foot[:, 0], "left_foot_y": h.left_foot[:, 1],
+        "right_foot_x": h.right_foot[:, 0], "right_foot_y": h.right_foot[:, 1],
+        "theta_ref_deg": h.theta_ref * deg, "theta_deg": h.theta * deg,
+    })
+
+
+def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]]) -> APIRouter:
+    """The session-scoped routes under ``prefix``; ``resolve`` is a FastAPI dependency
+    returning (session id, session)."""
+    r = router(prefix, "live session")
+    Session = Depends(resolve)
+
+    def _playback(session: SessionView, action: Callable[[], Any]) -> dict[str, Any]:
+        try:
+            ticket = action()
+        except ValueError as exc:
+            raise unprocessable(str(exc)) from None
+        frame = session.wait_applied(ticket, APPLY_TIMEOUT_S)
+        intent = session.intent
+        return {"paused": intent.paused, "speed": intent.speed, "applied": frame is not None,
+                "t": [x.t for x in frame.robots] if frame else None,
+                "clock": frame.clock if frame else None}
+
+    @r.get("/params", response_model=ParamsModel, tags=["params"])
+    def get_params(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        intent = s[1].intent
+        return params_dict(intent.params, intent.methods)
+
+    @r.put("/params", response_model=ParamsModel, tags=["params"])
+    def put_params(body: ParamsUpdate,  # type: ignore[valid-type]
+                   s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """Change some parameters (others keep their value): gains act on the next tick,
+        walking parameters from the next step."""
+        session = s[1]
+        try:
+            ticket = session.update_params(**updates(body))
+            if body.methods is not None:  # type: ignore[attr-defined]
+                ticket = session.set_methods(body.methods)  # type: ignore[attr-defined]
+        except (ValueError, TypeError) as exc:
+            raise unprocessable(str(exc)) from None
+        session.wait_applied(ticket, APPLY_TIMEOUT_S)
+        intent = session.intent
+        return params_dict(intent.params, intent.methods)
+
+    @r.post("/sim/pause", tags=["playback"])
+    def pause(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """Stop the clock (the robots hold still)."""
+        return _playback(s[1], s[1].pause)
+
+    @r.post("/sim/resume", tags=["playback"])
+    def resume(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """Run again, from the present (a sought instant is left)."""
+        return _playback(s[1], s[1].resume)
+
+    @r.post("/sim/reset", tags=["playback"])
+    def reset(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """Restart every robot from standing (t = 0), all together."""
+        return _playback(s[1], s[1].reset)
+
+    @r.post("/sim/step", tags=["playback"])
+    def step(body: StepRequest | None = None,
+             s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """Pause and advance one control period (5 ms), or to the next lift-off or landing
+        (``{"until": "liftoff"}``) of the first walking robot."""
+        until = body.until if body is not None else "tick"
+        return _playback(s[1], lambda: s[1].step(until))
+
+    @r.put("/sim/speed", tags=["playback"])
+    def put_speed(body: SpeedRequest, s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        return _playback(s[1], lambda: s[1].set_speed(body.speed))
+
+    @r.post("/sim/seek", response_model=StateResponse, tags=["playback"])
+    def seek(body: SeekRequest, s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """When paused, show the kept instant nearest to ``t`` [s of session clock] in the
+        scene, the horizon inspector and the plots; ``GET /api/state`` reports it."""
+        sid, session = s
+        if not session.intent.paused:
+            raise conflict("pause first: seeking shows a kept instant of a paused session")
+        try:
+            session.seek(body.t)
+        except ValueError as exc:
+            raise unprocessable(str(exc)) from None
+        return state_of(sid, session)
+
+    @r.post("/sim/push", tags=["playback"])
+    def push(body: PushRequest, s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """Push one robot's torso horizontally (MuJoCo ``xfrc_applied``) for ``duration`` s.
+        Nothing re-plans the footsteps: the CoM MPC re-plans from the measured state."""
+        return _playback(s[1], lambda: s[1].push(body.method, body.force, body.duration))
+
+    @r.get("/state", response_model=StateResponse, tags=["state"])
+    def get_state(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """Latest state and metrics of every robot (the sought instant while paused)."""
+        return state_of(*s)
+
+    @r.get("/horizon", response_model=HorizonResponse, tags=["state"])
+    def get_horizon(method: str | None = Query(None, description="fixed, redundancy or mpc "
+                                               "(default: mpc if shown, else the first)"),
+                    s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """The robot's plan over the horizon at the shown instant (Fig. 5-7): predicted CoM
+        and ZMP, ZMP reference and bounds, planned feet, reference and optimised pelvic angle;
+        lists of equal length, one per horizon sample."""
+        return horizon_of(s[0], s[1], method)
+
+    return r

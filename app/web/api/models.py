@@ -1,0 +1,195 @@
+"""Request and response models. The parameters' models are generated from
+:func:`controller.params.spec`, so every range lives in ``controller/params.py``; requests are
+converted to :class:`~controller.params.ControllerParams` at the edge (cross-field checks such
+as "horizon >= one MPC sample" come from its ``validated()``)."""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, create_model
+
+from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX, SPEED_MAX, SPEED_MIN, STEP_UNTIL
+from controller.params import GROUPS, METHODS, ControllerParams, spec
+
+MethodName = Literal[METHODS]  # type: ignore[valid-type]
+STRICT = ConfigDict(extra="forbid")
+
+
+def _field(meta: dict[str, Any], required: bool) -> tuple[Any, Any]:
+    """A pydantic (type, Field) pair from one field's metadata (strict, finite, ranged)."""
+    default = ... if required else None
+    desc = meta.get("label", "")
+    if meta.get("unit"):
+        desc += f" [{meta['unit']}]"
+    if meta.get("applies") == "step":
+        desc += " (takes effect from the next step)"
+    if meta.get("choices"):
+        typ: Any = Literal[tuple(meta["choices"])]  # type: ignore[valid-type]
+        return (typ if required else typ | None, Field(default, description=desc))
+    if meta["type"] == "bool":
+        return (bool if required else bool | None, Field(default, strict=True, description=desc))
+    typ = int if meta["type"] == "int" else float
+    return (
+        typ if required else typ | None,
+        Field(default, ge=meta.get("min"), le=meta.get("max"), strict=True,
+              allow_inf_nan=False, description=desc),
+    )
+
+
+def _group_models() -> tuple[dict[str, type[BaseModel]], dict[str, type[BaseModel]]]:
+    """(full models, partial-update models) per parameter group."""
+    full, partial = {}, {}
+    defaults = ControllerParams()
+    for group in GROUPS:
+        meta = spec(getattr(defaults, group))
+        cls_name = type(getattr(defaults, group)).__name__
+        full[group] = create_model(f"{cls_name}Model", __config__=STRICT,
+                                   **{k: _field(m, required=True) for k, m in meta.items()})
+        partial[group] = create_model(f"{cls_name}Update", __config__=STRICT,
+                                      **{k: _field(m, required=False) for k, m in meta.items()})
+    return full, partial
+
+
+GROUP_MODELS, GROUP_UPDATES = _group_models()
+ParamsModel = create_model(
+    "ParamsModel", __config__=STRICT,
+    **{g: (GROUP_MODELS[g], ...) for g in GROUPS},
+    methods=(list[MethodName], Field(..., description="robots shown live, one per method")),
+    control_dt=(float, Field(..., description="control period [s] (fixed)")),
+)
+ParamsUpdate = create_model(
+    "ParamsUpdate", __config__=STRICT,
+    **{g: (GROUP_UPDATES[g] | None, None) for g in GROUPS},
+    methods=(list[MethodName] | None,
+             Field(None, min_length=1, max_length=len(METHODS),
+                   description="methods to show live (fixed, redundancy, mpc)")),
+)
+RunRequest = create_model(
+    "RunRequest", __config__=STRICT,
+    method=(MethodName, Field("mpc", description="walking method")),
+    seed=(int | None, Field(None, strict=True, description="seed of a small perturbation")),
+    **{g: (GROUP_UPDATES[g] | None, None) for g in GROUPS},
+)
+
+
+def updates(body: BaseModel) -> dict[str, dict[str, Any]]:
+    """The parameter groups a request changes (fields it leaves out keep their value)."""
+    return {g: getattr(body, g).model_dump(exclude_none=True)
+            for g in GROUPS if getattr(body, g) is not None}
+
+
+def params_dict(params: ControllerParams, methods: tuple[str, ...]) -> dict[str, Any]:
+    out: dict[str, Any] = {g: dict(vars(getattr(params, g))) for g in GROUPS}
+    out["methods"] = list(methods)
+    out["control_dt"] = params.control_dt
+    return out
+
+
+class SpeedRequest(BaseModel):
+    model_config = STRICT
+    speed: float = Field(..., ge=SPEED_MIN, le=SPEED_MAX, strict=True, allow_inf_nan=False,
+                         description="playback speed [x real time]")
+
+
+class StepRequest(BaseModel):
+    model_config = STRICT
+    until: Literal[STEP_UNTIL] = Field(  # type: ignore[valid-type]
+        "tick", description="advance one 5 ms tick, or to the next lift-off or landing")
+
+
+class SeekRequest(BaseModel):
+    model_config = STRICT
+    t: float = Field(..., strict=True, allow_inf_nan=False,
+                     description="session clock [s] to show (the nearest kept instant)")
+
+
+class PushRequest(BaseModel):
+    model_config = STRICT
+    method: MethodName = Field(..., description="the robot to push")  # type: ignore[valid-type]
+    force: tuple[float, float] = Field(
+        ..., description=f"[Fx, Fy] horizontal force on the torso [N], |F| <= "
+        f"{PUSH_FORCE_MAX:.0f}")
+    duration: float = Field(0.1, gt=0.0, le=PUSH_DURATION_MAX, strict=True, allow_inf_nan=False,
+                            description="[s]")
+
+
+class RobotState(BaseModel):
+    method: str
+    t: float = Field(description="the robot's time since its (re)start [s]")
+    step_index: int
+    in_dsp: bool = Field(description="both feet down inside a step (double support)")
+    step_length: float = Field(description="length of the step in progress [m]")
+    status: str = Field(description="clean / knee nearly straight / IK at the speed limit / "
+                        "fell")
+    fell: bool
+    fall_reason: str | None
+    waiting: bool = Field(description="restarted, standing by to start in phase")
+    success: bool | None = Field(description="outcome of the last finished (or failed) walk")
+    walks_completed: int
+    falls: int
+    waist_angle_deg: float
+    kappa: float | None = Field(description="kappa(J) of eq. (45)")
+    yaw_momentum: float
+    reach: list[float | None] | None = Field(
+        description="hip-to-ankle / leg length, left and right")
+    zmp_ref: list[float] | None
+    zmp_measured: list[float] | None = Field(description="centre of pressure [m]")
+    pushing: bool
+    solver_failures: int
+    params: dict[str, Any] = Field(description="walking parameters in force in this robot")
+
+
+class KeptRange(BaseModel):
+    start: float | None = Field(description="oldest session clock kept [s]")
+    end: float | None = Field(description="newest session clock kept [s]")
+    frames: int
+    megabytes: float = Field(description="memory of the kept frames' arrays")
+
+
+class StateResponse(BaseModel):
+    session: str
+    seq: int
+    clock: float = Field(description="simulated time since the live session started [s]")
+    shown_t: float | None = Field(
+        description="session clock of the instant shown while paused and sought (POST "
+        "/api/sim/seek); null when showing the present")
+    kept: KeptRange
+    paused: bool
+    speed: float
+    realtime_factor: float | None = Field(description="simulated / wall time, last seconds")
+    compute_realtime_factor: float | None = Field(
+        description="simulated / compute time: how fast the loop could run unpaced")
+    robots: list[RobotState]
+
+
+class HorizonResponse(BaseModel):
+    """The plan of one robot over the horizon at the shown instant (paper Fig. 5-7)."""
+
+    session: str
+    method: str
+    clock: float = Field(description="session clock of the instant [s]")
+    t: list[float] = Field(description="[s] from the instant")
+    com_x: list[float]
+    com_y: list[float]
+    zmp_x: list[float]
+    zmp_y: list[float]
+    zmp_ref_x: list[float]
+    zmp_ref_y: list[float]
+    zmp_min_x: list[float]
+    zmp_max_x: list[float]
+    zmp_min_y: list[float]
+    zmp_max_y: list[float]
+    left_foot_x: list[float]
+    left_foot_y: list[float]
+    right_foot_x: list[float]
+    right_foot_y: list[float]
+    theta_ref_deg: list[float]
+    theta_deg: list[float]
+
+
+class RunStatus(BaseModel):
+    id: str
+    status: Literal["queued", "running", "done", "error"]
+    summary: dict[str, Any] | None = None
+    error: str | None = None

@@ -1,0 +1,1 @@
+"""The landing page that frames the viser scene, installed as package data of ``app``."""
