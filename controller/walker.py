@@ -74,9 +74,9 @@ class TickOutput:
     waist_rate: float  # [rad/s]
     h_low: float  # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
     h_up: float  # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
-    kappa: float  # condition number of J for the joints the method moves (eq. 45)
-    kappa_low: float  # kappa of J_low (12 x 13, eq. 9), the same matrix for every method
-    kappa_legs: float  # kappa of J_low's 12 leg columns (without the waist), every method
+    kappa: float  # kappa(J_low) (eq. 45 on the 12 x 13 J of eq. 9), every method alike
+    kappa_legs: float  # kappa of J_low's 12 leg columns (without the waist), every method:
+    # the one that sees a straight knee (the waist column hides it in J_low)
     reach: np.ndarray  # (2,) hip-to-ankle distance / leg length, left and right
     step_index: int  # current step (-1 before the first, n after the last)
     in_ssp: bool
@@ -294,8 +294,9 @@ class Walker:
         for name, failed in failures.items():
             self.failure_counts[name] += int(failed)
 
+        # eq. (45) on the same matrices for every method (the waist rate is pinned in fixed
+        # and mpc alike, so neither matrix favours a method)
         kappa_low, kappa_legs = jacobian_conditions(ks.J_low)
-        kappa = kappa_legs if p.method == "fixed" else kappa_low
         self.t = t + dt
         return TickOutput(
             t=t,
@@ -315,8 +316,7 @@ class Walker:
             waist_rate=self._last_waist_rate,
             h_low=float(ks.cmm_yaw_low @ q_dot_low),
             h_up=float(ks.cmm_yaw_up @ q_dot_up),
-            kappa=kappa,
-            kappa_low=kappa_low,
+            kappa=kappa_low,
             kappa_legs=kappa_legs,
             reach=leg_reach(ks),
             step_index=int(plan.step[0]),

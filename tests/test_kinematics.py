@@ -5,7 +5,13 @@ import numpy as np
 import pinocchio as pin
 import pytest
 
-from controller.kinematics import KinState, RobotKinematics, condition_number, leg_reach
+from controller.kinematics import (
+    KinState,
+    RobotKinematics,
+    condition_number,
+    jacobian_conditions,
+    leg_reach,
+)
 from models.dyros_jet import (
     ARM_QP_JOINTS,
     FOOT_SITES,
@@ -230,3 +236,19 @@ def test_condition_number_grows_as_leg_straightens(kin):
     assert kappas[-1] > 50 * kappas[0]
     qj = np.zeros(19)
     assert condition_number(kin.compute(qj).J_low) > 1e8
+
+
+def test_jacobian_conditions_match_the_svd_and_see_one_straight_knee(kin):
+    """kappa of J_low and of its leg columns (eq. 45, the same for every method): with one
+    knee straight the leg columns are singular, while the waist column keeps J_low's rank."""
+    for knee in (1.0, 0.3, 0.05):
+        qj = walk_ready_joint_angles()
+        qj[3], qj[4], qj[5] = -knee / 2, knee, -knee / 2  # left leg
+        J = kin.compute(qj).J_low
+        low, legs = jacobian_conditions(J)
+        assert low == pytest.approx(condition_number(J), rel=1e-6)
+        assert legs == pytest.approx(condition_number(J[:, 1:]), rel=1e-6)
+    qj = walk_ready_joint_angles()
+    qj[4] = 0.0  # left knee straight, the leg tilted as in a step (hip pitch -0.42 rad)
+    low, legs = jacobian_conditions(kin.compute(qj).J_low)
+    assert legs > 1e6 and low < 1e3

@@ -76,7 +76,8 @@ class RobotFrame:
     energy: float  # [J] cumulative positive joint work of this walk (eq. 44)
     solver_failures: int
     pushing: bool  # a push acts on the torso now
-    kappa: float  # kappa(J) the method is judged by (eq. 45)
+    kappa: float  # kappa(J_low) of eq. (45)
+    kappa_legs: float  # kappa of J_low's 12 leg columns: it explodes as a knee straightens
     reach: np.ndarray  # (2,) hip-to-ankle / leg length, left and right
     speed_limited: bool  # the IK held a joint at its speed limit this tick
     zmp_ref: np.ndarray | None  # (2,) [m] ZMP reference now
@@ -90,7 +91,7 @@ class RobotFrame:
         """One badge: fell / knee nearly straight / IK at the speed limit / clean."""
         if self.fell:
             return "fell"
-        if self.kappa >= KAPPA_SINGULAR or float(np.max(self.reach)) >= REACH_STRAIGHT:
+        if self.kappa_legs >= KAPPA_SINGULAR or float(np.max(self.reach)) >= REACH_STRAIGHT:
             return "knee nearly straight"
         if self.speed_limited:
             return "IK at the speed limit"
@@ -177,6 +178,7 @@ def robot_frame(session: Session, slot: int, method: str, falls: int, walks: int
         solver_failures=int(sum(session.walker.failure_counts.values())),
         pushing=world.pushing,
         kappa=out.kappa if out is not None else math.nan,
+        kappa_legs=out.kappa_legs if out is not None else math.nan,
         reach=out.reach.copy() if out is not None else np.full(2, math.nan),
         speed_limited=bool(out is not None and out.speed_limited),
         zmp_ref=out.zmp_ref.copy() if out is not None else None,

@@ -311,7 +311,7 @@ class LiveLoop:
                 math.degrees(m.waist_angle) if m is not None else math.nan,
                 math.degrees(out.waist_rate) if out is not None else math.nan,
                 m.yaw_momentum if m is not None else math.nan,
-                out.kappa if out is not None else math.nan,
+                out.kappa_legs if out is not None else math.nan,
                 robot.two_step_energy(),
                 (0.0 if out.in_ssp else 1.0) if walking else math.nan,
                 out.step_index if out is not None else -1,

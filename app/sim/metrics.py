@@ -25,8 +25,8 @@ COLUMNS = (
     "yaw_momentum",       # [kg m^2/s] whole body about the CoM, measured (MuJoCo)
     "h_low",              # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
     "h_up",               # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
-    "kappa",              # condition number of the moving joints' Jacobian (eq. 45)
-    "kappa_legs",         # condition number of J_low's 12 leg columns (every method)
+    "kappa",              # condition number of J_low, 12 x 13 (eq. 45), every method alike
+    "kappa_legs",         # condition number of J_low's 12 leg columns, every method alike
     "cop_x", "cop_y",     # [m] centre of pressure of the foot contact forces (nan if none)
     "zmp_in_support",     # 1 if the CoP is inside the support polygon
     "balance_margin",     # [m] CoP to the support polygon's edge, > 0 inside

@@ -2,9 +2,19 @@
 
 Definitions (SPEC.md section 5):
 - peaks (waist angle and rate, yaw momentum, kappa) over the walking phase, up to a fall;
-- energy per two-step window (eq. 44): :meth:`app.sim.session.Session.energy_windows`;
+- energy per two-step window (eq. 44): :meth:`app.sim.session.Session.energy_windows`, from
+  one sample of servo torque and joint speed per control period (200 Hz, as a robot logs
+  them); the figure from every 1 ms substep, which also counts the servo chatter inside a
+  period, is reported beside it (``*_substep``). Units: J per two-step window (the paper's
+  Table 1 header says W, but eq. 44 sums power x time);
+- kappa(J) of eq. (45) on the same matrices for every method: ``condition_number_max`` of
+  J_low (12 x 13, eq. 9) and ``condition_number_legs_max`` of its 12 leg columns. A straight
+  knee makes the leg columns singular, but the waist column restores J_low's rank (at a
+  straight left knee: kappa 82 for J_low, 1.2e8 for the legs: tests/test_kinematics.py), so
+  the clean criterion reads the legs' figure, for every method alike;
 - *clean*: success, every landing within ``LANDING_ERROR_CLEAN``, no QP failure, no servo
-  saturation, no IK tick at the joint-speed limit, kappa(J) below ``KAPPA_SINGULAR``.
+  saturation, no IK tick at the joint-speed limit, kappa of the leg columns below
+  ``KAPPA_SINGULAR``.
 """
 
 from __future__ import annotations
@@ -47,8 +57,10 @@ def summarize(session: Session) -> dict[str, Any]:
         col = np.nan_to_num(col[~np.isnan(col)], posinf=KAPPA_CAP)
         return float(np.max(np.abs(col)) * scale) if len(col) else 0.0
 
-    windows = session.energy_windows(substep=True).sum(axis=1)
-    windows_ctrl = session.energy_windows().sum(axis=1)
+    # eq. (44) from 200 Hz samples, as a robot logs them (the 1 ms substep figure beside it)
+    per_joint = session.energy_windows()  # (windows, joints)
+    windows = per_joint.sum(axis=1)
+    windows_substep = session.energy_windows(substep=True).sum(axis=1)
     tick = s.column("tick_ms")
     tick = tick[np.isfinite(tick)] if len(tick) else np.zeros(1)
     sim_time = float(session.t)
@@ -58,7 +70,7 @@ def summarize(session: Session) -> dict[str, Any]:
     margin = margin[np.isfinite(margin)]
     tilt = s.column("sole_tilt")[walking]
     tilt = tilt[np.isfinite(tilt)]
-    kappa_max = peak("kappa")
+    kappa_legs_max = peak("kappa_legs")
     return {
         "method": p.method,
         "arms": bool(p.arms.enabled),
@@ -75,7 +87,7 @@ def summarize(session: Session) -> dict[str, Any]:
         "yaw_momentum_peak": peak("yaw_momentum"),
         "energy_two_step_mean": float(np.mean(windows)) if len(windows) else None,
         "energy_two_step_std": float(np.std(windows)) if len(windows) else None,
-        "condition_number_max": kappa_max,
+        "condition_number_max": peak("kappa"),
         "zmp_in_support_ratio": (
             session.zmp_inside / session.zmp_ticks if session.zmp_ticks else 0.0
         ),
@@ -92,8 +104,12 @@ def summarize(session: Session) -> dict[str, Any]:
         "solver_failures_by_layer": dict(session.walker.failure_counts),
         "landing_errors": landed,
         "energy_two_step_windows": windows.tolist(),
-        "energy_two_step_windows_200hz": windows_ctrl.tolist(),
-        "condition_number_legs_max": peak("kappa_legs"),
+        "energy_two_step_per_joint_mean": (
+            per_joint.mean(axis=0).tolist() if len(per_joint) else None),
+        "energy_two_step_mean_substep": (
+            float(np.mean(windows_substep)) if len(windows_substep) else None),
+        "energy_two_step_windows_substep": windows_substep.tolist(),
+        "condition_number_legs_max": kappa_legs_max,
         "balance_margin_min": float(np.min(margin)) if len(margin) else None,
         "balance_margin_p5": float(np.percentile(margin, 5)) if len(margin) else None,
         "sole_tilt_max_deg": float(np.max(tilt) * DEG) if len(tilt) else None,
@@ -102,7 +118,7 @@ def summarize(session: Session) -> dict[str, Any]:
             and landed
             and max(landed) < LANDING_ERROR_CLEAN
             and failures == 0
-            and kappa_max < KAPPA_SINGULAR
+            and kappa_legs_max < KAPPA_SINGULAR
             and world.saturated_substeps == 0
             and session.speed_limited_ticks == 0
         ),
