@@ -66,6 +66,18 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="the report /report shows (default: the latest `experiments --out`)",
     )
+    p.add_argument("--workers", type=int, default=None,
+                   help="worker processes running the robots (default: one per core; 0: in "
+                   "this process)")
+    p.add_argument("--sessions", choices=("shared", "private"), default=None,
+                   help="shared: every browser watches one session (default); private: each "
+                   "browser gets its own while the workers have room")
+    p.add_argument("--robots-per-worker", type=_positive_int, default=None,
+                   help="robots one worker runs at once (default 2; see pelvic-walk bench)")
+    p.add_argument("--display-hz", type=_finite, default=None,
+                   help="scene updates per second at most (default 20)")
+    p.add_argument("--idle-timeout", type=_finite, default=None,
+                   help="[s] an API-opened private session without calls ends (default 300)")
 
     p = sub.add_parser(
         "simulate", help="one headless closed-loop MuJoCo run",
@@ -88,6 +100,15 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("sweep", help="a parameter grid over methods (process pool or Ray)")
     add_sweep_arguments(p)
+
+    p = sub.add_parser("loadtest", help="N scene viewers against a server (loopback only)")
+    p.add_argument("--viewers", type=_positive_int, default=20)
+    p.add_argument("--robots", type=int, choices=(1, 2, 3), default=3)
+    p.add_argument("--seconds", type=_positive_int, default=120)
+    p.add_argument("--port", type=_port, default=None,
+                   help="a server already running on 127.0.0.1 (default: start one)")
+    p.add_argument("--viser-port", type=_port, default=None)
+    p.add_argument("--json", type=Path, default=None)
 
     p = sub.add_parser("bench", help="performance figures")
     p.add_argument("--json", type=Path, default=None)
@@ -170,7 +191,9 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "serve":
             from app.web.server import serve
 
-            return serve(args.host, args.port, args.viser_port, args.report_dir)
+            return serve(args.host, args.port, args.viser_port, args.report_dir, args.workers,
+                         args.sessions, args.robots_per_worker, args.display_hz,
+                         args.idle_timeout)
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main
 
@@ -179,6 +202,11 @@ def main(argv: list[str] | None = None) -> int:
             from app.sweep import sweep_main
 
             return sweep_main(args)
+        if args.command == "loadtest":
+            from app.loadtest import main as loadtest_main
+
+            return loadtest_main(args.viewers, args.robots, args.seconds, args.port,
+                                 args.viser_port, args.json)
         if args.command == "bench":
             from app.bench import main as bench_main
 

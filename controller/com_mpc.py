@@ -56,13 +56,11 @@ class ComPlan:
 
     times: np.ndarray  # (N,) [s] absolute times of the predicted samples t + k T_p, k = 1..N
     com: np.ndarray  # (N, 2) [m] predicted CoM x, y (eq. 25-26)
-    com_vel: np.ndarray  # (N, 2) [m/s]
     zmp: np.ndarray  # (N, 2) [m] predicted ZMP
     zmp_ref: np.ndarray  # (N, 2) [m]
     jerk: np.ndarray  # (N, 2) [m/s^3] optimal inputs
     next_state: np.ndarray  # (3, 2) [pos, vel, acc] x (x, y) after one control period
     ok: bool  # False when the QP failed (the previous jerk sequence, shifted, was used)
-    com_acc: np.ndarray | None = None  # (N, 2) [m/s^2] predicted CoM acceleration
     zmp_lo: np.ndarray | None = None  # (N, 2) [m] ZMP lower bound at the samples
     zmp_hi: np.ndarray | None = None  # (N, 2) [m] ZMP upper bound at the samples
     status: str = ""  # solver status text
@@ -138,6 +136,7 @@ class ComMpc:
         N, T, c = self.N, self.T, self.com_height / GRAVITY
         self.state_from_state, self.state_from_jerk = prediction_matrices(T, N)  # P_A, P_B
         PA, PB = self.state_from_state, self.state_from_jerk
+        self._com_from_state, self._com_from_jerk = PA[:N].copy(), PB[:N].copy()  # positions
         self.zmp_from_state = PA[:N] - c * PA[2 * N :]  # (N, 3)
         self.zmp_from_jerk = PB[:N] - c * PB[2 * N :]  # (N, N)
         D = np.eye(N) - np.eye(N, k=-1)  # consecutive differences of [v_1..v_N]
@@ -235,14 +234,12 @@ class ComMpc:
             jerk = self._prev_jerk[np.minimum(np.arange(N) + max(shift, 0), N - 1)]
         else:
             jerk = np.zeros((N, 2))
-        traj = self.state_from_state @ x0 + self.state_from_jerk @ jerk  # (3N, 2)
-        com, vel, acc = traj[:N], traj[N : 2 * N], traj[2 * N :]
+        com = self._com_from_state @ x0 + self._com_from_jerk @ jerk  # (N, 2), eq. (25-26)
         zmp = self.zmp_from_state @ x0 + self.zmp_from_jerk @ jerk
         next_state = self.A_ctrl @ x0 + self.B_ctrl[:, None] * jerk[0]  # A x0 + B u0
         return ComPlan(
-            times=times, com=com, com_vel=vel, zmp=zmp, zmp_ref=ref, jerk=jerk,
-            next_state=next_state, ok=bool(res.ok), com_acc=acc, zmp_lo=lo, zmp_hi=hi,
-            status=res.status,
+            times=times, com=com, zmp=zmp, zmp_ref=ref, jerk=jerk, next_state=next_state,
+            ok=bool(res.ok), zmp_lo=lo, zmp_hi=hi, status=res.status,
         )
 
     def zmp_of(self, state: np.ndarray) -> np.ndarray:

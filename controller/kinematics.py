@@ -26,7 +26,6 @@ Conventions:
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -188,17 +187,15 @@ def jacobian_conditions(J_low: np.ndarray) -> tuple[float, float]:
     """kappa (eq. 45) of J_low (12 x 13) and of its 12 leg columns, each inf when singular.
 
     sigma^2 are the eigenvalues of J J' (cheaper than an SVD at 200 Hz; kappa is resolved up
-    to about 1e7, far above the 1e3 that marks a straight knee). Without the waist column
-    J_low is block diagonal (each foot's rows depend on its own leg only), so the legs'
-    values are those of the two 6 x 6 blocks: one batched call.
+    to about 1e7, far above the 1e3 that marks a straight knee). With L the leg columns and w
+    the waist column, J J' = L L' + w w': both Gram matrices go to one batched call.
     """
     J = np.asarray(J_low, dtype=float)
-    lam_low = np.linalg.eigvalsh(J @ J.T)  # ascending
-    blocks = np.stack((J[:6, 1:7], J[6:, 7:13]))  # left foot / left leg, right / right
-    lam_legs = np.linalg.eigvalsh(blocks @ blocks.transpose(0, 2, 1))  # (2, 6)
-    return (_kappa(math.sqrt(max(lam_low[-1], 0.0)), math.sqrt(max(lam_low[0], 0.0))),
-            _kappa(math.sqrt(max(lam_legs[:, -1].max(), 0.0)),
-                   math.sqrt(max(lam_legs[:, 0].min(), 0.0))))
+    legs = J[:, 1:] @ J[:, 1:].T  # (12, 12), block diagonal: each foot on its own leg
+    w = J[:, 0]
+    lam = np.linalg.eigvalsh(np.stack((legs + np.outer(w, w), legs)))  # (2, 12) ascending
+    lo, hi = np.sqrt(np.maximum(lam[:, 0], 0.0)), np.sqrt(np.maximum(lam[:, -1], 0.0))
+    return _kappa(float(hi[0]), float(lo[0])), _kappa(float(hi[1]), float(lo[1]))
 
 
 def _kappa(s_max: float, s_min: float, floor: float = _EPS) -> float:
@@ -209,4 +206,5 @@ def _kappa(s_max: float, s_min: float, floor: float = _EPS) -> float:
 
 def leg_reach(kin: KinState) -> np.ndarray:
     """(2,) hip-to-ankle distance / LEG_LENGTH for the left and right leg (1 = straight)."""
-    return np.linalg.norm(kin.p_pelvis_hips - kin.p_pelvis_ankles, axis=1) / LEG_LENGTH
+    d = kin.p_pelvis_hips - kin.p_pelvis_ankles
+    return np.sqrt((d * d).sum(axis=1)) / LEG_LENGTH

@@ -163,10 +163,11 @@ class PelvisMpc:
         free = self._PA_ang @ x0  # (N,) angles with zero input
         res = self.solver.solve(self._build(ref, free))
         if res.ok:
-            u = self._M @ (res.x - free)  # (N,) inputs from the angles
+            angles = res.x  # the QP's variable (module docstring)
+            u = self._M @ (angles - free)  # (N,) inputs from the angles
         else:
             u = self._brake(theta_dot)
-        angles = free + self._PB_ang @ u
+            angles = free + self._PB_ang @ u
         rates = self._PA_rate @ x0 + self._PB_rate @ u
         dt = self.control_dt
         if res.ok:

@@ -58,9 +58,9 @@ def lateral_distances(
         half_width: half the step width [m] (the nominal distance).
         floor: [m] smallest |distance| (``current`` and ``predicted``).
     """
-    n = np.atleast_2d(p_pelvis).shape[0]
+    n = np.shape(p_pelvis)[0] if np.ndim(p_pelvis) == 2 else 1
     if mode == "nominal":
-        dy = np.array([half_width, -half_width])
+        return np.tile((half_width, -half_width), (n, 1))
     elif mode == "current":
         dy = np.array([p_left_now[1] - p_pelvis_now[1], p_right_now[1] - p_pelvis_now[1]])
     elif mode == "predicted":
@@ -69,9 +69,9 @@ def lateral_distances(
                               np.atleast_2d(p_right)[:, 1] - p_pelvis[:, 1]])
     else:
         raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
-    if mode != "nominal":  # the left foot lies at +y of the pelvis, the right at -y
-        dy = np.stack([np.maximum(dy[..., 0], floor), np.minimum(dy[..., 1], -floor)], axis=-1)
-    return np.broadcast_to(dy, (n, 2))
+    # the left foot lies at +y of the pelvis, the right at -y: keep each at least the floor
+    dy = np.stack([np.maximum(dy[..., 0], floor), np.minimum(dy[..., 1], -floor)], axis=-1)
+    return np.tile(dy, (n, 1)) if dy.ndim == 1 else dy
 
 
 def reference_pelvic_angles(
@@ -94,17 +94,15 @@ def reference_pelvic_angles(
     Returns:
         (N,) reference pelvic angles theta_ref(k) [rad], positive about +z.
     """
+    p_pelvis = np.atleast_2d(p_pelvis)
+    # dx of eq. (28)-(29) for both feet: (N, 2) [m]
+    dx = np.column_stack((np.atleast_2d(p_left)[:, 0], np.atleast_2d(p_right)[:, 0]))
+    dx -= p_pelvis[:, :1]
     lateral = np.asarray(lateral, dtype=float)
-    if np.any(lateral[:, 0] <= 0.0) or np.any(lateral[:, 1] >= 0.0):
+    if lateral[0, 0] <= 0.0 or lateral[0, 1] >= 0.0:  # held over the horizon, or per sample
         raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
-    p_pelvis = np.atleast_2d(np.asarray(p_pelvis, dtype=float))
-    p_left = np.atleast_2d(np.asarray(p_left, dtype=float))
-    p_right = np.atleast_2d(np.asarray(p_right, dtype=float))
-    dx_left = p_left[:, 0] - p_pelvis[:, 0]  # eq. (28) [m]
-    dx_right = p_right[:, 0] - p_pelvis[:, 0]  # eq. (29) [m]
-    theta_left = np.arctan(k_pel * dx_left / lateral[:, 0])  # eq. (31)
-    theta_right = np.arctan(k_pel * dx_right / lateral[:, 1])  # eq. (32)
-    return -0.5 * (theta_left + theta_right)  # eq. (30) with the sign rule of SPEC section 1
+    # eq. (31)-(32) per foot, eq. (30) their mean, with the sign rule of SPEC section 1
+    return -0.5 * np.arctan(k_pel * dx / lateral).sum(axis=1)
 
 
 def hip_points(

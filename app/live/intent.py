@@ -46,6 +46,11 @@ class Intent:
     step_until: str = "tick"  # what the latest single step advances to (STEP_UNTIL)
     reset_requests: int = 0  # resets asked for so far (monotonic)
     pushes: tuple[Push, ...] = ()  # the latest push requests, oldest first
+    # The session's time base, shared by every loop running part of it (they may sit in
+    # different worker processes): session clock ``anchor[1]`` [s] at monotonic wall time
+    # ``anchor[0]`` [s]; while running the clock is anchor[1] + (now - anchor[0]) * speed.
+    anchor: tuple[float, float] = (0.0, 0.0)
+    start_clock: float = 0.0  # [s] robots (re)built by a reset start walking at this clock
     version: int = 0  # bumped on every change
 
 

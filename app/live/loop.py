@@ -15,11 +15,16 @@ latest :class:`~app.live.intent.Intent` from a callable and hands each
 5. sleep to the wall clock x ``speed``; when it cannot keep up it runs as fast as it can
    and reports the real-time factor it measured.
 
+Time base: the intent carries the session's anchor (a session clock at a monotonic wall
+time, and the speed), so loops running parts of one session in different processes keep the
+same clock: each one sleeps while ahead of it and runs flat out while behind.
+
 Live choices: plans are long (``LIVE_STEPS``); a robot whose plan ends starts again; a robot
 that falls is shown fallen for ``FALL_RESET_S`` of simulated time, then restarts. A robot
-that restarts alone stands by until the others reach the same point of their step cycle
-(a left step about to start ``t_start`` later), so side-by-side robots stay in phase; a reset
-or a change of methods restarts all of them together.
+that restarts alone stands by until it is in phase again (a left step about to start
+``t_start`` later) with the other robots, or with its own previous plan, which the others
+follow too; a reset or a change of methods rebuilds all robots, which start walking together
+at the intent's ``start_clock``.
 """
 
 from __future__ import annotations
@@ -38,6 +43,7 @@ from app.live.frames import LiveFrame, robot_frame
 from app.live.history import HISTORY_DECIMATION, ROW_COLUMNS
 from app.live.intent import Intent
 from app.sim.session import RunConfig, Session
+from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
 
 log = logging.getLogger(__name__)
@@ -48,7 +54,6 @@ RTF_WINDOW_S = 3.0  # [s] of wall time over which the real-time factor is measur
 PUBLISH_HZ = 30.0  # frames per second of wall time while running (the display rate)
 SERIES_S = 4.0  # [s] each robot's own time series ring (the loop reads only its last row)
 STEP_UNTIL_MAX_S = 3.0  # [s] a "next lift-off / landing" step gives up after this
-BEHIND_S = 0.25  # [s] behind the wall clock by more: re-anchor instead of catching up
 
 
 def live_params(params: ControllerParams | None = None) -> ControllerParams:
@@ -68,6 +73,8 @@ class _Robot:
     error: str | None = None  # the controller raised: shown down, then restarted
     fell_at: float | None = None  # the robot's time of its fall
     waiting_since: float | None = None  # session clock when it began standing by
+    ref: tuple[FootstepPlan, float] | None = None  # its previous plan, and the session clock
+    # at which that plan's time was 0: where the other robots' steps are, after a restart
     _energy_key: int = -1
     _energy: float = math.nan
 
@@ -128,7 +135,7 @@ class LiveLoop:
         self,
         intents: Callable[[], Intent],
         publish: Callable[[LiveFrame], None],
-        clock: Callable[[], float] = time.perf_counter,
+        clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] = time.sleep,
         idle: Callable[[float], None] | None = None,
         publish_hz: float = PUBLISH_HZ,
@@ -141,7 +148,7 @@ class LiveLoop:
         self.publish_interval = 1.0 / publish_hz
         self.robots: dict[str, _Robot] = {}
         self.applied: Intent | None = None
-        self.clock = 0.0  # [s] simulated time since the session started
+        self.clock = 0.0  # [s] simulated time since the session started (its time base)
         self.steps_done = 0
         self.pushes_done = 0
         self.seq = 0
@@ -149,7 +156,6 @@ class LiveLoop:
         self._ticks = 0
         self._busy = 0.0
         self._rates = _Rates()
-        self._anchor = (clock(), 0.0)  # (wall, simulated) the pacing counts from
         self._rows: dict[str, list[np.ndarray]] = {}
         self._last_publish = -math.inf
         self._restarted = True
@@ -183,19 +189,27 @@ class LiveLoop:
 
     def _apply(self, intent: Intent) -> None:
         old = self.applied
+        if old is None:  # join the session's time base (a part may start late)
+            dt = intent.params.control_dt
+            self.clock = round(max(self._target(intent), 0.0) / dt) * dt
         if old is None or intent.methods != old.methods or (
             intent.reset_requests != self._resets_done
         ):
             self.robots = {m: self._robot(m, intent.params) for m in intent.methods}
             self._resets_done = intent.reset_requests
+            late = self.clock > intent.start_clock + intent.params.control_dt / 2
+            for robot in self.robots.values():
+                # The robots of every loop of the session start at start_clock; one built too
+                # late for it (a slow part) joins them in phase instead.
+                robot.ref = (robot.session.plan, intent.start_clock)
+                robot.waiting_since = self.clock if late else None
             self._rows = {}
             self._restarted = True
         elif intent.params != old.params:
             for robot in self.robots.values():
                 robot.session.walker.set_params(dataclasses.replace(intent.params,
                                                                     method=robot.method))
-        if old is None or intent.speed != old.speed or intent.paused != old.paused:
-            self._anchor = (self._clock(), self.clock)
+        if old is None or intent.anchor != old.anchor or intent.paused != old.paused:
             self._rates = _Rates()
         if not intent.paused:
             self.steps_done = intent.step_requests  # resuming drops pending single steps
@@ -214,9 +228,12 @@ class LiveLoop:
         return _Robot(method, Session(cfg, capacity=int(SERIES_S / params.control_dt)))
 
     def _tick_all(self, intent: Intent) -> None:
-        """One control period for every robot; a plot row every HISTORY_DECIMATION ticks."""
-        for robot in self.robots.values():
-            self._tick_robot(robot, intent.params)
+        """One control period for every robot; a plot row every HISTORY_DECIMATION ticks.
+        Robots rebuilt by a reset stand still until the session clock reaches
+        ``intent.start_clock``."""
+        if self.clock + 1e-9 >= intent.start_clock:  # before it, the robots stand still
+            for robot in self.robots.values():
+                self._tick_robot(robot, intent.params)
         self.clock += intent.params.control_dt
         self._ticks += 1
         if self._ticks % HISTORY_DECIMATION == 0 or intent.paused:
@@ -272,6 +289,8 @@ class LiveLoop:
 
     def _restart(self, robot: _Robot, params: ControllerParams) -> None:
         """A fresh session that stands by until it can start in phase with the others."""
+        old = robot.session
+        robot.ref = (old.plan, self.clock - old.t)
         fresh = self._robot(robot.method, params)
         robot.session, robot.error, robot.fell_at = fresh.session, None, None
         robot.waiting_since = self.clock
@@ -289,14 +308,22 @@ class LiveLoop:
         reference robot is ``t_start`` before the start of one of its own left steps (same
         timing from then on), or alone, or after two step cycles of waiting at most.
         """
-        ref = self._reference()
+        other = self._reference()
         plan = robot.session.plan
+        if other is not None:  # a robot of this loop that walks
+            ref_plan, ref_t = other.session.plan, other.session.t
+        elif robot.ref is not None:  # its own previous plan, which the others follow too
+            ref_plan, ref_t = robot.ref[0], self.clock - robot.ref[1]
+        else:
+            robot.waiting_since = None
+            return
         waited = self.clock - (robot.waiting_since or self.clock)
-        start = ref is None or waited > 2 * 2 * plan.walk.step_time + plan.t_start
-        if not start and ref is not None:
-            rp, dt = ref.session.plan, ref.session.params.control_dt
-            lead = rp.step_start[: rp.n_walking_steps] - plan.t_start - ref.session.t
-            left = rp.swing_side[: rp.n_walking_steps] == plan.swing_side[0]
+        start = waited > 2 * 2 * plan.walk.step_time + plan.t_start
+        if not start:
+            dt = robot.session.params.control_dt
+            n = ref_plan.n_walking_steps
+            lead = ref_plan.step_start[:n] - plan.t_start - ref_t
+            left = ref_plan.swing_side[:n] == plan.swing_side[0]
             start = bool(np.any(left & (lead > -dt / 2) & (lead <= dt / 2)))
         if start:
             robot.waiting_since = None
@@ -342,10 +369,15 @@ class LiveLoop:
         self._last_publish = self._clock()
         self._publish_to(frame)
 
+    def _target(self, intent: Intent) -> float:
+        """The session clock now on the intent's time base [s]."""
+        wall0, clock0 = intent.anchor
+        if intent.paused:
+            return clock0
+        return clock0 + (self._clock() - wall0) * intent.speed
+
     def _pace(self, intent: Intent) -> None:
-        wall0, sim0 = self._anchor
-        ahead = wall0 + (self.clock - sim0) / intent.speed - self._clock()
+        """Sleep while ahead of the time base; while behind, run on without sleeping."""
+        ahead = (self.clock - self._target(intent)) / intent.speed  # [s] of wall time
         if ahead > 0:
             self._sleep(ahead)
-        elif ahead < -BEHIND_S:  # cannot keep up: run as fast as possible from here
-            self._anchor = (self._clock(), self.clock)

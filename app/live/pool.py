@@ -1,41 +1,46 @@
 """Worker processes for the live sessions, seen from the web process.
 
-The web process keeps the viser broadcast, FastAPI and the display threads; the simulation
-runs in ``n_workers`` worker processes (``app.live.worker``), so the robots keep real time
-whatever the number of viewers, as long as their worker has the compute. Each worker holds up
-to ``sessions_per_worker`` sessions; :meth:`WorkerPool.open` places a session on the worker
-with the most room or raises :class:`PoolFull` (admission control).
+The web process keeps the viser broadcast, FastAPI and the display thread; the robots run in
+``n_workers`` worker processes (``app.live.worker``), so they keep real time whatever the
+number of viewers, as long as their worker has the compute. Each robot of a session runs in
+a *part* (a :class:`~app.live.loop.LiveLoop` with that one robot) placed on the worker with
+the most free robot slots (``robots_per_worker`` each), so one session's robots use every
+core. The parts share the session's time base (the intent's anchor) and rebuild together, so
+the robots stay in step; :class:`RemoteSession` merges their frames into one.
 
-A :class:`RemoteSession` is a :class:`~app.live.session.SessionView` whose intent changes are
-sent to its worker and whose frames come back from it. A receiver thread per worker reads
-the frames; when a worker dies (the pipe closes), the pool records it, starts a new process
-and re-opens the dead worker's sessions there with their current intent (their robots start
-again from standing; frames, plots and kept history continue on the display side).
+:meth:`WorkerPool.open` raises :class:`PoolFull` when the robots would not fit (admission
+control). A receiver thread per worker reads the frames; when a worker dies (its pipe
+closes), the pool records it, starts a new process, re-opens the dead worker's parts there
+and restarts the robots of every session it held, all together.
 """
 
 from __future__ import annotations
 
-import itertools
+import dataclasses
 import logging
 import multiprocessing
 import os
 import pickle
 import threading
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from app.live.frames import LiveFrame
-from app.live.intent import Intent
+from app.live.intent import Intent, check_methods
 from app.live.loop import PUBLISH_HZ
 from app.live.session import KEEP_S, SessionView
 from app.live.worker import FrameCodec, worker_main
 
 log = logging.getLogger(__name__)
 START_TIMEOUT_S = 60.0  # a new worker imports numpy, MuJoCo and Pinocchio first
+START_DELAY_S = 1.0  # [s] rebuilt robots start this much later: parts build in parallel
 
 
 class PoolFull(RuntimeError):
-    """Every worker holds as many sessions as it may."""
+    """The workers have no room for the robots asked for."""
 
 
 @dataclass
@@ -46,7 +51,7 @@ class WorkerDeath:
     pid: int | None
     exitcode: int | None
     time: float  # time.time()
-    sessions: tuple[str, ...]  # the sessions it held, restarted elsewhere
+    sessions: tuple[str, ...]  # the sessions it held, restarted
 
     def describe(self) -> str:
         when = time.strftime("%H:%M:%S", time.localtime(self.time))
@@ -57,24 +62,78 @@ class WorkerDeath:
 
 
 class RemoteSession(SessionView):
-    """A live session run by a worker process."""
+    """A live session whose robots run in worker processes, one part per robot."""
 
     def __init__(self, sid: str, intent: Intent, pool: WorkerPool, keep_s: float = KEEP_S):
-        super().__init__(intent, keep_s)
+        super().__init__(intent, keep_s, start_delay=START_DELAY_S)
         self.sid = sid
         self.pool = pool
-        self.worker: _Worker | None = None
+        self.parts: dict[str, _Worker] = {}  # method -> the worker running it
+        self._latest: dict[str, LiveFrame] = {}  # method -> its part's latest frame
+        self._rows: dict[str, list[np.ndarray]] = {}  # rows since the last merged frame
+        self._restarted = False
+        self._seq = 0
+        self._merge_lock = threading.Lock()
+
+    def part_id(self, method: str) -> str:
+        return f"{self.sid}/{method}"
+
+    def part_intent(self, method: str, intent: Intent | None = None) -> Intent:
+        return dataclasses.replace(intent or self.intent, methods=(method,))
+
+    def set_methods(self, methods: Sequence[str]) -> Intent:
+        """Show these robots (PoolFull when the workers have no room for the new ones)."""
+        methods = check_methods(methods)
+        self.pool.reserve(self, methods)
+        return super().set_methods(methods)
 
     def _intent_changed(self) -> None:
-        if self.worker is not None:
-            self.worker.send(("intent", self.sid, self.intent))
+        intent = self.intent
+        self.pool.sync_parts(self, intent)
+        for method, w in list(self.parts.items()):
+            w.send(("intent", self.part_id(method), self.part_intent(method, intent)))
 
     @property
     def running(self) -> bool:
-        return not self._closed.is_set() and self.worker is not None
+        return not self._closed.is_set() and bool(self.parts)
+
+    @property
+    def worker_pids(self) -> list[int | None]:
+        return sorted({w.process.pid for w in self.parts.values()})
 
     def close(self) -> None:
         self.pool.close(self)
+
+    def receive_part(self, method: str, frame: LiveFrame) -> None:
+        """A part's frame: merge the parts' latest frames into one session frame."""
+        with self._merge_lock:
+            self._latest[method] = frame
+            for m, rows in frame.rows.items():
+                self._rows.setdefault(m, []).append(rows)
+            self._restarted |= frame.restarted
+            order = [m for m in self.intent.methods if m in self._latest and m in self.parts]
+            if not order or (method != order[0] and not frame.paused):
+                return  # merge on the lead part's frames (and every frame while paused)
+            parts = [self._latest[m] for m in order]
+            lead = parts[0]
+            rtf = [p.realtime_factor for p in parts]
+            crtf = [p.compute_realtime_factor for p in parts]
+            self._seq += 1
+            merged = dataclasses.replace(
+                lead, seq=self._seq,
+                paused=all(p.paused for p in parts),
+                realtime_factor=None if None in rtf else min(rtf),  # type: ignore[type-var]
+                compute_realtime_factor=None if None in crtf else min(crtf),  # type: ignore
+                intent_version=min(p.intent_version for p in parts),
+                steps_done=min(p.steps_done for p in parts),
+                pushes_done=min(p.pushes_done for p in parts),
+                robots=tuple(dataclasses.replace(p.robots[0], slot=i)
+                             for i, p in enumerate(parts) if p.robots),
+                rows={m: np.concatenate(r) for m, r in self._rows.items()},
+                restarted=self._restarted,
+            )
+            self._rows, self._restarted = {}, False
+        self.receive(merged)
 
 
 @dataclass
@@ -83,7 +142,7 @@ class _Worker:
     process: multiprocessing.process.BaseProcess
     commands: object  # Connection (web -> worker)
     frames: object  # Connection (worker -> web)
-    sessions: dict[str, RemoteSession] = field(default_factory=dict)
+    parts: dict[str, tuple[RemoteSession, str]] = field(default_factory=dict)  # id -> (s, m)
     lock: threading.Lock = field(default_factory=threading.Lock)
     ready: threading.Event = field(default_factory=threading.Event)
     codec: FrameCodec = field(default_factory=FrameCodec)
@@ -94,23 +153,27 @@ class _Worker:
             try:
                 self.commands.send(message)  # type: ignore[attr-defined]
             except (BrokenPipeError, OSError):
-                pass  # the receiver thread notices the death and restarts the sessions
+                pass  # the receiver thread notices the death and restarts the parts
+
+    @property
+    def robots(self) -> int:
+        return len(self.parts)
 
 
 class WorkerPool:
-    """``n_workers`` processes running live sessions (see the module docstring)."""
+    """``n_workers`` processes running the robots of live sessions (module docstring)."""
 
-    def __init__(self, n_workers: int, sessions_per_worker: int = 1,
+    def __init__(self, n_workers: int, robots_per_worker: int = 3,
                  publish_hz: float = PUBLISH_HZ):
-        if n_workers < 1 or sessions_per_worker < 1:
-            raise ValueError("need at least one worker and one session per worker")
+        if n_workers < 1 or robots_per_worker < 1:
+            raise ValueError("need at least one worker and one robot per worker")
         self.n_workers = n_workers
-        self.sessions_per_worker = sessions_per_worker
+        self.robots_per_worker = robots_per_worker
         self.publish_hz = publish_hz
         self._ctx = multiprocessing.get_context("spawn")
         self._lock = threading.RLock()
         self._workers: list[_Worker] = []
-        self._ids = itertools.count(1)
+        self.sessions: dict[str, RemoteSession] = {}
         self.deaths: list[WorkerDeath] = []
         self._stopped = False
 
@@ -123,14 +186,14 @@ class WorkerPool:
         return self
 
     def _spawn(self, index: int) -> _Worker:
-        cmd_parent, cmd_child = self._ctx.Pipe(duplex=False)[::-1]  # (send end, recv end)
-        frm_child, frm_parent = self._ctx.Pipe(duplex=False)[::-1]
+        cmd_recv, cmd_send = self._ctx.Pipe(duplex=False)
+        frm_recv, frm_send = self._ctx.Pipe(duplex=False)
         # One BLAS thread per worker: the matrices are small and the cores are for workers.
         env = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
         os.environ.update(OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
         try:
-            proc = self._ctx.Process(target=worker_main, args=(cmd_child, frm_child,
-                                                               self.publish_hz),
+            proc = self._ctx.Process(target=worker_main,
+                                     args=(cmd_recv, frm_send, self.publish_hz),
                                      name=f"pelvic-walk-worker-{index}", daemon=True)
             proc.start()
         finally:
@@ -139,9 +202,9 @@ class WorkerPool:
                     os.environ.pop(k, None)
                 else:
                     os.environ[k] = v
-        cmd_child.close()
-        frm_child.close()
-        w = _Worker(index, proc, cmd_parent, frm_parent)
+        cmd_recv.close()
+        frm_send.close()
+        w = _Worker(index, proc, cmd_send, frm_recv)
         threading.Thread(target=self._receive, args=(w,), name=f"worker-{index}-frames",
                          daemon=True).start()
         return w
@@ -150,84 +213,118 @@ class WorkerPool:
         """Read one worker's messages until its pipe closes; then handle its death."""
         while True:
             try:
-                kind, sid, payload = pickle.loads(w.frames.recv_bytes())  # type: ignore
+                kind, pid, payload = pickle.loads(w.frames.recv_bytes())  # type: ignore
             except (EOFError, OSError):
                 break
             if kind == "ready":
                 w.ready.set()
-            elif kind == "frame":
-                session = w.sessions.get(sid)
-                if session is not None:
-                    frame: LiveFrame = w.codec.decode(sid, payload)
-                    session.receive(frame)
+                continue
+            owner = w.parts.get(pid)
+            if owner is None:
+                continue
+            session, method = owner
+            if kind == "frame":
+                session.receive_part(method, w.codec.decode(pid, payload))
             elif kind == "error":
-                session = w.sessions.get(sid)
-                if session is not None:
-                    session.error = payload.splitlines()[0]
-                    log.error("session %s: %s", sid, payload)
+                session.error = payload.splitlines()[0]
+                log.error("session %s, robot %s: %s", session.sid, method, payload)
         if not w.stopping and not self._stopped:
             self._replace(w)
 
     def _replace(self, dead: _Worker) -> None:
-        """A worker died: record it, start another, re-open its sessions there."""
+        """A worker died: record it, start another, re-open its parts there and restart the
+        robots of every session it held (all of them together, to stay in step)."""
         dead.process.join(1.0)
         with self._lock:
+            held = {s.sid: s for s, _m in dead.parts.values()}
             self.deaths.append(WorkerDeath(dead.index, dead.process.pid,
-                                           dead.process.exitcode, time.time(),
-                                           tuple(dead.sessions)))
+                                           dead.process.exitcode, time.time(), tuple(held)))
             log.error(self.deaths[-1].describe())
             new = self._spawn(dead.index)
             self._workers[dead.index] = new
         new.ready.wait(START_TIMEOUT_S)
-        for session in list(dead.sessions.values()):
-            self._place(session, new)
+        with self._lock:
+            for session, method in dead.parts.values():
+                self._open_part(new, session, method)
+        for session in held.values():
+            session.reset()
 
-    def _place(self, session: RemoteSession, w: _Worker) -> None:
-        session.worker = w
-        w.sessions[session.sid] = session
-        w.send(("open", session.sid, (session.intent,)))
+    # -- parts and sessions ----------------------------------------------------------------
+    def _open_part(self, w: _Worker, session: RemoteSession, method: str) -> None:
+        pid = session.part_id(method)
+        session.parts[method] = w
+        w.parts[pid] = (session, method)
+        w.send(("open", pid, (session.part_intent(method),)))
 
-    # -- sessions --------------------------------------------------------------------------
+    def _close_part(self, session: RemoteSession, method: str) -> None:
+        w = session.parts.pop(method, None)
+        pid = session.part_id(method)
+        if w is not None and w.parts.pop(pid, None) is not None:
+            w.send(("close", pid, None))
+            w.codec.forget(pid)
+
+    def _free(self) -> list[_Worker]:
+        return [w for w in self._workers if w.robots < self.robots_per_worker]
+
+    def reserve(self, session: RemoteSession, methods: Sequence[str]) -> None:
+        """PoolFull unless the workers have room for the robots ``session`` would add."""
+        with self._lock:
+            need = len([m for m in methods if m not in session.parts])
+            room = sum(self.robots_per_worker - w.robots for w in self._workers)
+            if need > room:
+                raise PoolFull(f"the workers hold {self.n_workers} x {self.robots_per_worker}"
+                               f" robots and have room for {room} more, not {need}")
+
+    def sync_parts(self, session: RemoteSession, intent: Intent) -> None:
+        """Open a part for every new robot of the session, close those it no longer shows."""
+        if session._closed.is_set():
+            return
+        with self._lock:
+            for method in [m for m in session.parts if m not in intent.methods]:
+                self._close_part(session, method)
+            for method in intent.methods:
+                if method not in session.parts:
+                    free = self._free()
+                    if not free:
+                        raise PoolFull("no worker has room for another robot")
+                    self._open_part(min(free, key=lambda x: x.robots), session, method)
+
     def open(self, intent: Intent, keep_s: float = KEEP_S, sid: str | None = None
              ) -> RemoteSession:
-        """A new session on the worker with the most room; PoolFull when all are full."""
+        """A new session (its robots placed where there is room); PoolFull otherwise."""
         with self._lock:
-            free = [w for w in self._workers if len(w.sessions) < self.sessions_per_worker]
-            if not free:
-                raise PoolFull(f"{self.count()} sessions run, the most "
-                               f"{self.n_workers} x {self.sessions_per_worker} workers hold")
-            w = min(free, key=lambda x: len(x.sessions))
-            session = RemoteSession(sid or f"s{next(self._ids)}", intent, self, keep_s)
-            self._place(session, w)
+            sid = sid or f"s{len(self.sessions) + 1}"
+            while sid in self.sessions:
+                sid += "'"
+            session = RemoteSession(sid, intent, self, keep_s)
+            self.reserve(session, intent.methods)
+            self.sessions[sid] = session
+            self.sync_parts(session, session.intent)
             return session
 
     def close(self, session: RemoteSession) -> None:
-        """End a session and free its room on the worker."""
+        """End a session and free its robots' slots."""
         with self._lock:
-            w = session.worker
             session._closed.set()
-            session.worker = None
-            if w is not None and w.sessions.pop(session.sid, None) is not None:
-                w.send(("close", session.sid, None))
-                w.codec.forget(session.sid)
+            for method in list(session.parts):
+                self._close_part(session, method)
+            self.sessions.pop(session.sid, None)
         with session._changed:
             session._changed.notify_all()
 
-    def count(self) -> int:
-        return sum(len(w.sessions) for w in self._workers)
+    def robots(self) -> int:
+        return sum(w.robots for w in self._workers)
 
     @property
     def capacity(self) -> int:
-        return self.n_workers * self.sessions_per_worker
+        """Robots the workers hold in all."""
+        return self.n_workers * self.robots_per_worker
 
     def workers(self) -> list[dict]:
         """One line per worker for /api/health and /api/sessions."""
         with self._lock:
             return [{"index": w.index, "pid": w.process.pid, "alive": w.process.is_alive(),
-                     "sessions": sorted(w.sessions)} for w in self._workers]
-
-    def pid(self, session: RemoteSession) -> int | None:
-        return session.worker.process.pid if session.worker is not None else None
+                     "robots": sorted(w.parts)} for w in self._workers]
 
     def stop(self) -> None:
         self._stopped = True

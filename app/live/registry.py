@@ -124,11 +124,10 @@ class SessionRegistry:
         out = []
         for sid, e in entries:
             frame = e.session.frame()
-            worker = getattr(e.session, "worker", None)
             out.append({
                 "id": sid, "kind": "shared" if sid == SHARED else "private",
                 "owner": e.owner,
-                "worker_pid": worker.process.pid if worker is not None else None,
+                "worker_pids": getattr(e.session, "worker_pids", []),
                 "methods": list(e.session.intent.methods),
                 "realtime_factor": frame.realtime_factor if frame else None,
                 "paused": e.session.intent.paused,
@@ -142,8 +141,10 @@ class SessionRegistry:
 
     @property
     def capacity_private(self) -> int:
-        """Private sessions the workers can hold beside the shared one."""
-        return 0 if self.pool is None or self.mode != "private" else self.pool.capacity - 1
+        """Robots the workers have room for beside those running (private mode)."""
+        if self.pool is None or self.mode != "private":
+            return 0
+        return self.pool.capacity - self.pool.robots()
 
     def _reap(self) -> None:
         while not self._stop.wait(1.0):

@@ -15,6 +15,7 @@ present.
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import math
 import threading
@@ -44,9 +45,12 @@ PLOT_HISTORY_S = 60.0  # [s] of plot rows kept
 
 def initial_intent(params: ControllerParams | None = None,
                    methods: Sequence[str] = DEFAULT_METHODS, speed: float = 1.0) -> Intent:
-    """A session's first intent (validated)."""
+    """A session's first intent (validated); its time base starts when the session opens."""
     params = (params or live_params()).validated()
     return Intent(params=params, methods=check_methods(methods), speed=check_speed(speed))
+
+
+CATCH_UP_S = 1.0  # [s] a loop this far behind its time base: the base moves (no rush after)
 
 
 class SessionView:
@@ -57,8 +61,14 @@ class SessionView:
         keep_s: seconds of frames kept for scrubbing and recording.
     """
 
-    def __init__(self, intent: Intent, keep_s: float = KEEP_S):
+    def __init__(self, intent: Intent, keep_s: float = KEEP_S,
+                 wall: Callable[[], float] = time.monotonic, start_delay: float = 0.0):
+        self._wall = wall  # the monotonic wall clock of the time base (shared by processes)
+        self.start_delay = start_delay  # [s] robots (re)built start this much later, so that
+        # loops in other processes, which take a moment to build theirs, start with them
+        intent = dataclasses.replace(intent, anchor=(wall(), 0.0), start_clock=start_delay)
         self._box = IntentBox(intent, on_change=self._intent_changed)
+        self._last_catch_up = -math.inf
         self._changed = threading.Condition()  # notified when a frame arrives
         self._frame: LiveFrame | None = None
         self._shown: float | None = None  # session clock shown while paused (seek)
@@ -88,21 +98,43 @@ class SessionView:
         return self._box.modify(lambda cur: {"params": cur.params.replace(**groups)})
 
     def set_methods(self, methods: Sequence[str]) -> Intent:
+        """Show these robots; all robots are rebuilt and start together."""
         methods = check_methods(methods)
         if methods == self.intent.methods:
             return self.intent
-        return self._box.modify(lambda _cur: {"methods": methods})
+        return self._box.modify(lambda cur: {"methods": methods, **self._restart_at(cur)})
 
     def set_speed(self, speed: float) -> Intent:
         speed = check_speed(speed)
-        return self._box.modify(lambda _cur: {"speed": speed})
+        return self._box.modify(lambda cur: {"speed": speed, "anchor": self._anchor_now(cur)})
 
     def pause(self) -> Intent:
         return self._box.modify(lambda _cur: {"paused": True})
 
     def resume(self) -> Intent:
+        """Run again from the present: the time base restarts at the clock now."""
         self._shown = None
-        return self._box.modify(lambda _cur: {"paused": False})
+        return self._box.modify(lambda cur: {"paused": False, "anchor": self._anchor_now(cur)})
+
+    # -- the time base ---------------------------------------------------------------------
+    def clock_now(self, intent: Intent | None = None) -> float:
+        """The session clock now [s]: the latest frame's while paused, else the time base's."""
+        intent = intent or self.intent
+        frame = self.frame()
+        if intent.paused:
+            return frame.clock if frame is not None else intent.anchor[1]
+        return intent.anchor[1] + (self._wall() - intent.anchor[0]) * intent.speed
+
+    def _anchor_now(self, cur: Intent) -> tuple[float, float]:
+        frame = self.frame()
+        clock = frame.clock if cur.paused and frame is not None else self.clock_now(cur)
+        return (self._wall(), clock)
+
+    def _restart_at(self, cur: Intent) -> dict:
+        """Fields that rebuild every robot, to start together ``start_delay`` from now."""
+        delay = 0.0 if cur.paused else self.start_delay
+        return {"reset_requests": cur.reset_requests + 1,
+                "start_clock": self.clock_now(cur) + delay}
 
     def step(self, until: str = "tick") -> Intent:
         """Pause (if running) and advance one tick, or to the next lift-off or landing."""
@@ -115,7 +147,7 @@ class SessionView:
     def reset(self) -> Intent:
         """Restart every robot from standing (t = 0), all together."""
         self._shown = None
-        return self._box.modify(lambda cur: {"reset_requests": cur.reset_requests + 1})
+        return self._box.modify(self._restart_at)
 
     def push(self, method: str, force: Sequence[float], duration: float) -> Intent:
         """Push one robot's torso horizontally; ValueError on an unknown robot or size."""
@@ -198,6 +230,19 @@ class SessionView:
         with self._changed:
             self._frame = frame
             self._changed.notify_all()
+        self._catch_up(frame)
+
+    def _catch_up(self, frame: LiveFrame) -> None:
+        """Move the time base when the loops fell behind it by more than CATCH_UP_S (e.g.
+        the machine was busy): otherwise they would rush to catch up."""
+        intent = self.intent
+        now = self._wall()
+        if intent.paused or now - self._last_catch_up < CATCH_UP_S:
+            return
+        if self.clock_now(intent) - frame.clock > CATCH_UP_S:
+            self._last_catch_up = now
+            self._box.modify(lambda cur: {"anchor": (now, frame.clock)}
+                             if not cur.paused else {})
 
 
 
@@ -218,13 +263,13 @@ class LiveSim(SessionView):
         params: ControllerParams | None = None,
         methods: Sequence[str] = DEFAULT_METHODS,
         speed: float = 1.0,
-        clock: Callable[[], float] = time.perf_counter,
+        clock: Callable[[], float] = time.monotonic,
         sleep: Callable[[float], None] | None = None,
         keep_s: float = KEEP_S,
         publish_hz: float = PUBLISH_HZ,
     ):
         self._wake = threading.Event()  # set on every intent change (cuts a pacing sleep)
-        super().__init__(initial_intent(params, methods, speed), keep_s)
+        super().__init__(initial_intent(params, methods, speed), keep_s, wall=clock)
         self._thread: threading.Thread | None = None
         self.loop = LiveLoop(self._box.get, self.receive, clock=clock,
                              sleep=sleep or self._pause_for, idle=self._pause_for,

@@ -1,13 +1,14 @@
 """A worker process: it runs live sessions and sends their frames to the web process.
 
 The web process (``app.live.pool``) starts workers with ``spawn`` and talks to each over two
-pipes: commands in (open a session with its first intent, a new intent, close, stop) and
-frames out. Each session runs its :class:`~app.live.loop.LiveLoop` in a thread of the worker,
-paced to real time on its own; the worker holds no display or web object.
+pipes: commands in (open a part of a session with its first intent, a new intent, close,
+stop) and frames out. Each part runs its :class:`~app.live.loop.LiveLoop` in a thread of the
+worker, paced to the session's time base; the worker holds no display or web object.
 
-Frames cross as one pickled message each (a few kB: plain arrays). A robot's footstep plan
-changes only on a replan or a restart, so it is sent once and then referred to by
-:class:`FrameCodec` (the receiver fills it back in).
+Frames cross as one pickled message each (a few kB: plain arrays), sent by a thread of their
+own (:class:`Outbox`) so that a busy web process never slows the simulation. A robot's
+footstep plan changes only on a replan or a restart, so it is sent once and then referred to
+by :class:`FrameCodec` (the receiver fills it back in).
 """
 
 from __future__ import annotations
@@ -16,10 +17,13 @@ import dataclasses
 import logging
 import os
 import pickle
+import signal
 import threading
 import traceback
 from multiprocessing.connection import Connection
 from typing import Any
+
+import numpy as np
 
 from app.live.frames import LiveFrame
 from app.live.intent import Intent
@@ -96,40 +100,94 @@ class _Hosted:
                         f"{traceback.format_exc(limit=5)}"))
 
 
+class Outbox:
+    """Frames waiting for the pipe, one slot per part: a loop never waits for the web process.
+
+    When the web process reads slower than a part publishes (it is busy sending the scene to
+    many viewers), a part's unsent frame is replaced by its newer one, the plot rows of both
+    kept, so the simulation runs on at real time and only the display rate drops.
+    """
+
+    def __init__(self, send_bytes) -> None:
+        self._send_bytes = send_bytes
+        self._cond = threading.Condition()
+        self._frames: dict[str, LiveFrame] = {}
+        self._other: list[tuple] = []  # messages that are never dropped (errors, ready)
+        self.codec = FrameCodec()
+        self.dropped = 0
+
+    def put_frame(self, pid: str, frame: LiveFrame) -> None:
+        with self._cond:
+            old = self._frames.get(pid)
+            if old is not None:  # unsent: keep its rows, show the newer state
+                self.dropped += 1
+                rows = {m: np.concatenate([old.rows[m], r]) if m in old.rows else r
+                        for m, r in frame.rows.items()}
+                frame = dataclasses.replace(frame, rows={**old.rows, **rows},
+                                            restarted=old.restarted or frame.restarted)
+            self._frames[pid] = frame
+            self._cond.notify()
+
+    def put(self, message: tuple) -> None:
+        with self._cond:
+            self._other.append(message)
+            self._cond.notify()
+
+    def forget(self, pid: str) -> None:
+        with self._cond:
+            self._frames.pop(pid, None)
+            self.codec.forget(pid)
+
+    def run(self) -> None:
+        """The sender thread: pickle and send whatever waits, oldest kind first."""
+        while True:
+            with self._cond:
+                while not self._frames and not self._other:
+                    self._cond.wait()
+                other, self._other = self._other, []
+                frames, self._frames = self._frames, {}
+                batch = other + [("frame", pid, self.codec.encode(pid, f))
+                                 for pid, f in frames.items()]
+            for message in batch:
+                try:
+                    self._send_bytes(pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL))
+                except (BrokenPipeError, OSError):
+                    os._exit(0)  # the web process is gone
+
+
 def worker_main(commands: Connection, frames: Connection, publish_hz: float) -> None:
     """Entry point of a worker process: serve commands until told to stop or orphaned."""
     logging.basicConfig(level=logging.WARNING)
-    codec = FrameCodec()
-    lock = threading.Lock()
+    # The web process stops its workers (Ctrl-C reaches the whole process group): ignore
+    # the signals; a worker also ends when the web process's pipe closes.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    outbox = Outbox(frames.send_bytes)
+    threading.Thread(target=outbox.run, name="outbox", daemon=True).start()
     hosted: dict[str, _Hosted] = {}
 
     def send(message: tuple) -> None:
-        kind, sid, payload = message
+        kind, pid, payload = message
         if kind == "frame":
-            payload = codec.encode(sid, payload)
-        data = pickle.dumps((kind, sid, payload), protocol=pickle.HIGHEST_PROTOCOL)
-        with lock:  # one writer at a time on the pipe
-            try:
-                frames.send_bytes(data)
-            except (BrokenPipeError, OSError):
-                os._exit(0)  # the web process is gone
+            outbox.put_frame(pid, payload)
+        else:
+            outbox.put(message)
 
     send(("ready", "", os.getpid()))
     while True:
         try:
-            kind, sid, payload = commands.recv()
+            kind, pid, payload = commands.recv()
         except (EOFError, OSError):
             break  # the web process is gone
         if kind == "open":
             intent, = payload
-            hosted[sid] = _Hosted(sid, intent, send, publish_hz)
-            hosted[sid].thread.start()
-        elif kind == "intent" and sid in hosted:
-            hosted[sid].set_intent(payload)
-        elif kind == "close" and sid in hosted:
-            hosted.pop(sid).stop()
-            with lock:
-                codec.forget(sid)
+            hosted[pid] = _Hosted(pid, intent, send, publish_hz)
+            hosted[pid].thread.start()
+        elif kind == "intent" and pid in hosted:
+            hosted[pid].set_intent(payload)
+        elif kind == "close" and pid in hosted:
+            hosted.pop(pid).stop()
+            outbox.forget(pid)
         elif kind == "stop":
             break
     for h in hosted.values():

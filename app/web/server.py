@@ -1,11 +1,16 @@
-"""``pelvic-walk serve``: viser (3-D scene + GUI), the live simulation and FastAPI, together.
+"""``pelvic-walk serve``: FastAPI and the viser scene in this process, the robots in workers.
 
-Three kinds of threads in one process (the machine may have only two cores):
+Processes and threads (the machine may have only two cores):
 
-- the **live simulation** thread (:class:`~app.live.LiveSim`) ticks the robots;
-- the **display** thread (:class:`LiveView`) reads the latest published frame at
-  ``DISPLAY_HZ`` and draws it (scene, plots, GUI reflection); viser's own thread sends it;
+- **worker processes** (``--workers``, default one per core; ``app.live.pool``) run the live
+  sessions, each paced to real time, and send their frames back; with ``--workers 0`` the
+  shared session runs in a thread of this process instead;
+- the **display** thread (:class:`~app.web.view.Display`) draws each view's shown frame at
+  most ``--display-hz`` times a second; viser's own thread sends the scene to the browsers;
 - **uvicorn** serves the page and the HTTP API in the main thread.
+
+``--sessions shared`` (the default) shows one session to every browser; ``--sessions private``
+gives each browser its own while the workers have room (``--robots-per-worker``).
 
 viser silently takes the next free port when its port is busy, so :func:`serve` checks
 ``get_port()`` and stops with one clear line (exit status 2); the FastAPI port is checked
@@ -15,72 +20,22 @@ before anything starts.
 from __future__ import annotations
 
 import logging
+import os
 import socket
 import sys
-import threading
-import time
 from pathlib import Path
 
 import viser
+from pydantic import ValidationError
 
-from app.live import LiveSim
+from app.live.pool import WorkerPool
+from app.live.registry import SessionRegistry
+from app.live.session import initial_intent
 from app.web.api import create_app
-from app.web.gui import ControlPanel
-from app.web.scene import SceneView
 from app.web.settings import Settings
+from app.web.view import Display
 
-DISPLAY_HZ = 25.0
 log = logging.getLogger(__name__)
-
-
-class LiveView:
-    """The viser scene and GUI of a :class:`LiveSim`, redrawn by a display thread."""
-
-    def __init__(self, server: viser.ViserServer, live: LiveSim, hz: float = DISPLAY_HZ):
-        from app.sim.world import World
-
-        self.server = server
-        self.live = live
-        self.period = 1.0 / hz
-        model = World().model  # the same MJCF as the simulation (only read for shapes)
-        self.scene = SceneView(server, model)
-        self.panel = ControlPanel(server, live, self.scene)
-        self._stop = threading.Event()
-        self._thread: threading.Thread | None = None
-        self.draw_count = 0
-
-    def start(self) -> LiveView:
-        self._thread = threading.Thread(target=self._run, name="live-display", daemon=True)
-        self._thread.start()
-        return self
-
-    def stop(self) -> None:
-        self._stop.set()
-        if self._thread is not None:
-            self._thread.join(2.0)
-
-    def draw_once(self) -> None:
-        frame = self.live.shown_frame()
-        if frame is not None:
-            self.scene.draw(frame)
-        self.panel.reflect(frame)
-        self.draw_count += 1
-
-    def _run(self) -> None:
-        last_seq = -1
-        while not self._stop.is_set():
-            t0 = time.perf_counter()
-            frame = self.live.shown_frame()
-            try:
-                if frame is None or frame.seq != last_seq or (
-                    self.panel._reflected_version != self.live.intent.version
-                ):
-                    self.draw_once()
-                    last_seq = frame.seq if frame else -1
-            except Exception:  # noqa: BLE001 - a drawing bug must not kill the display
-                log.exception("display update failed")
-                time.sleep(0.5)
-            self._stop.wait(max(0.0, self.period - (time.perf_counter() - t0)))
 
 
 def port_free(host: str, port: int) -> bool:
@@ -105,21 +60,38 @@ def serve(
     port: int | None = None,
     viser_port: int | None = None,
     report_dir: Path | None = None,
+    workers: int | None = None,
+    sessions: str | None = None,
+    robots_per_worker: int | None = None,
+    display_hz: float | None = None,
+    idle_timeout: float | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
-    ``report_dir``: what ``/report`` shows (default: the latest ``pelvic-walk experiments``
-    output, else the packaged reference report).
+    Unset arguments come from :class:`~app.web.settings.Settings` (environment
+    ``PELVIC_WALK_*``). ``report_dir``: what ``/report`` shows (default: the latest
+    ``pelvic-walk experiments`` output, else the packaged reference report).
     """
     import uvicorn
 
-    settings = Settings()
-    host = host or settings.host
-    port = port or settings.port
-    viser_port = viser_port or settings.viser_port
-    report_dir = report_dir or settings.report_dir
+    given = {"host": host, "port": port, "viser_port": viser_port, "report_dir": report_dir,
+             "workers": workers, "sessions": sessions,
+             "robots_per_worker": robots_per_worker, "display_hz": display_hz,
+             "idle_timeout": idle_timeout}
+    try:  # the command line over the environment over the defaults, checked in one place
+        settings = Settings(**{k: v for k, v in given.items() if v is not None})
+    except ValidationError as exc:
+        err = exc.errors()[0]
+        return _fail(f"--{'-'.join(map(str, err['loc'])).replace('_', '-')}: {err['msg']}")
+    host, port, viser_port = settings.host, settings.port, settings.viser_port
+    report_dir, sessions = settings.report_dir, settings.sessions
+    workers = settings.workers if settings.workers is not None else (os.cpu_count() or 1)
+    robots_per_worker, display_hz = settings.robots_per_worker, settings.display_hz
+    idle_timeout = settings.idle_timeout
     if port == viser_port:
         return _fail(f"--port and --viser-port must differ (both {port})")
+    if sessions == "private" and workers < 1:
+        return _fail("--sessions private needs worker processes (--workers 1 or more)")
     if not port_free(host, port):
         return _fail(f"port {port} on {host} is in use; choose another with --port")
     if not port_free(host, viser_port):
@@ -130,14 +102,17 @@ def serve(
         viser_server.stop()
         return _fail(f"port {viser_port} on {host} is in use; choose another with --viser-port")
 
-    live = LiveSim().start()
-    view = LiveView(viser_server, live).start()
-    app = create_app(live, viser_port=viser_port, report_dir=report_dir)
+    pool = WorkerPool(workers, robots_per_worker, display_hz).start() if workers else None
+    registry = SessionRegistry.start(sessions, initial_intent(), pool, idle_timeout)
+    display = Display(viser_server, registry, display_hz).start()
+    app = create_app(registry, viser_port=viser_port, report_dir=report_dir,
+                     health_extra=display.health)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning")
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host
     print(f"pelvic-walk: open http://{shown}:{port}/  (3-D scene: http://{shown}:{viser_port}/,"
-          f" API docs: http://{shown}:{port}/docs); Ctrl-C to stop", flush=True)
+          f" API docs: http://{shown}:{port}/docs); {workers} worker process"
+          f"{'es' if workers != 1 else ''}, {sessions} sessions; Ctrl-C to stop", flush=True)
     status = 0
     try:
         server.run()
@@ -146,8 +121,10 @@ def serve(
     except KeyboardInterrupt:
         status = 0
     finally:
-        view.stop()
-        live.stop()
+        display.stop()
+        registry.shutdown()
+        if pool is not None:
+            pool.stop()
         app.state.runs.shutdown()
         viser_server.stop()
     if not server.started and status == 0:

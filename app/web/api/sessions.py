@@ -53,7 +53,7 @@ def sessions_router(registry: SessionRegistry) -> APIRouter:
             "mode": registry.mode,
             "sessions": registry.list(),
             "private_sessions": registry.count_private(),
-            "private_capacity": registry.capacity_private,
+            "robot_slots_free": registry.capacity_private,
             "workers": pool.workers() if pool is not None else [],
         })
 

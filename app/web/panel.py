@@ -1,0 +1,348 @@
+"""The viser control panel of one view: playback and timeline, views, comparison, presets,
+parameters, push, layers; and the Inspect, Plots and Learn tabs.
+
+Every control only writes intent into the view's session (never the simulation). The
+parameter folders are generated from :func:`controller.params.spec` (a new gain in
+controller/params.py appears here): weights spanning decades get a log-scale slider with the
+paper's value marked, every control says whether it acts on the next tick or from the next
+step, and settings known to break walking are explained when chosen (:func:`warnings_for`).
+
+The panel also *reflects* the intent (a ``PUT /api/params`` moves the sliders): assigning a
+value from Python fires the control's callback synchronously in viser, so :meth:`reflect`
+marks its own thread as reflecting and the callbacks ignore what they receive there; a
+callback that receives the value already in force does nothing either, so nothing can loop.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+import threading
+from typing import TYPE_CHECKING, Any
+
+import viser
+
+from app.live import SPEED_MAX, SPEED_MIN, LiveFrame, live_params
+from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX
+from app.web.lessons import EXPLAIN, PRESETS, analysis_svg, warnings_for
+from app.web.plots import HorizonInspector, LivePlots
+from app.web.scene import CAMERA_VIEWS, LAYERS, legend_html
+from controller.params import GROUP_TITLES, GROUPS, METHOD_INFO, METHODS, ControllerParams, spec
+
+if TYPE_CHECKING:
+    from app.web.view import View
+
+STATUS_HZ = 2.0  # status text refreshes per second while running
+MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
+PUSH_DIRECTIONS = {"left (+y)": (0.0, 1.0), "right (-y)": (0.0, -1.0),
+                   "forward (+x)": (1.0, 0.0), "backward (-x)": (-1.0, 0.0)}
+
+
+def _label(meta: dict[str, Any]) -> str:
+    unit = meta.get("unit")
+    return f"{meta['label']} [{unit}]" if unit else str(meta["label"])
+
+
+def _hint(meta: dict[str, Any]) -> str:
+    when = ("from the next step (the footsteps are re-planned)" if meta.get("applies") == "step"
+            else "on the next tick")
+    extra = f"; {meta['help']}" if meta.get("help") else ""
+    paper = f"; paper: {meta['paper']:g}" if meta.get("paper") is not None else ""
+    return f"Acts {when}{paper}{extra}."
+
+
+class ControlPanel:
+    """All the GUI of one view; writes intent into ``view.session``."""
+
+    def __init__(self, gui: Any, view: View):
+        self.gui = gui
+        self.view = view
+        self._local = threading.local()  # .reflecting: True inside reflect() on that thread
+        self._reflected_version = -1
+        self._session_id = id(view.session)
+        self.controls: dict[tuple[str, str], tuple[Any, bool]] = {}  # -> (handle, log scale)
+        self.method_boxes: dict[str, Any] = {}
+        self._message: str | None = None  # a one-off message in the status area
+        self._status_time = -math.inf
+        gui.configure_theme(control_layout="fixed", control_width="large", dark_mode=False,
+                            show_logo=False, show_share_button=False)
+        self.notice = gui.add_markdown(view.notice or "")
+        self.notice.visible = bool(view.notice)
+        self.status = gui.add_markdown("starting...")
+        tabs = gui.add_tab_group()
+        with tabs.add_tab("Controls", viser.Icon.ADJUSTMENTS):
+            self._build_controls()
+        with tabs.add_tab("Inspect", viser.Icon.CHART_LINE):
+            self.inspector = HorizonInspector(gui)
+        with tabs.add_tab("Plots", viser.Icon.CHART_DOTS):
+            self.plots = LivePlots(gui, view.session)
+        with tabs.add_tab("Learn", viser.Icon.SCHOOL):
+            self._build_learn()
+
+    @property
+    def session(self):
+        return self.view.session
+
+    # -- building ------------------------------------------------------------------------
+    def _guarded(self) -> bool:
+        return getattr(self._local, "reflecting", False)
+
+    def _build_controls(self) -> None:
+        gui = self.gui
+        intent = self.session.intent
+        with gui.add_folder("Playback"):
+            self.pause_button = gui.add_button("Pause", icon=viser.Icon.PLAYER_PAUSE)
+            self.pause_button.on_click(lambda _e: self._toggle_pause())
+            row = gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
+            row.on_click(lambda e: self._step(e.target.value))
+            self.timeline = gui.add_slider("Timeline [s] (paused)", 0.0, 1.0, 0.005, 1.0,
+                                           disabled=True,
+                                           hint="while paused: show any kept instant")
+            self.timeline.on_update(lambda _e: self._seek())
+            self.speed = gui.add_slider("Speed [x real time]", SPEED_MIN, SPEED_MAX, 0.1,
+                                        intent.speed)
+            self.speed.on_update(lambda _e: self._speed_changed())
+            reset = gui.add_button("Restart all robots together", icon=viser.Icon.REFRESH)
+            reset.on_click(lambda _e: self.session.reset())
+        with gui.add_folder("View"):
+            cams = gui.add_button_group("Camera", tuple(CAMERA_VIEWS))
+            cams.on_click(lambda e: self.view.scene.set_camera(e.target.value, e.client))
+            sticks = gui.add_checkbox("Stick diagram of the last step (Fig. 11)", False,
+                                      hint="hips and legs at lift-off (grey) and landing "
+                                      "(black) of the last step")
+            sticks.on_update(lambda _e: self.view.scene.set_sticks(sticks.value))
+            gui.add_html(legend_html())
+        with gui.add_folder("Compare"):
+            for method in METHODS:
+                box = gui.add_checkbox(METHOD_INFO[method].title, method in intent.methods)
+                box.on_update(lambda _e: self._methods_changed())
+                self.method_boxes[method] = box
+        with gui.add_folder("Presets", expand_by_default=False):
+            for name in PRESETS:
+                button = gui.add_button(name)
+                button.on_click(lambda _e, name=name: self.apply_preset(name))
+        for group in GROUPS:
+            meta_all = spec(getattr(intent.params, group))
+            with gui.add_folder(GROUP_TITLES[group], expand_by_default=group == "walk"):
+                for name, meta in meta_all.items():
+                    if meta.get("gui", True):
+                        self._add_param(group, name, meta,
+                                        getattr(getattr(intent.params, group), name))
+        with gui.add_folder("Push a robot", expand_by_default=False):
+            gui.add_markdown(
+                "A horizontal push on the torso. The CoM MPC re-plans from the measured state "
+                "at the next tick; **nothing moves the footsteps**, so a push must be absorbed "
+                "within the planned footholds: a strong one makes the robot fall (it gets up "
+                "after 2 s).")
+            self.push_robot = gui.add_dropdown("Robot", intent.methods)
+            self.push_force = gui.add_slider("Force [N]", 10.0, PUSH_FORCE_MAX, 10.0, 60.0)
+            self.push_dir = gui.add_dropdown("Direction", tuple(PUSH_DIRECTIONS),
+                                             initial_value="left (+y)")
+            self.push_time = gui.add_slider("Duration [s]", 0.05, PUSH_DURATION_MAX, 0.05, 0.1)
+            go = gui.add_button("Push", icon=viser.Icon.HAND_STOP)
+            go.on_click(lambda _e: self._push())
+        with gui.add_folder("Layers", expand_by_default=False):
+            self.layer_boxes = {}
+            for key, (label, default) in LAYERS.items():
+                box = gui.add_checkbox(label, default)
+                box.on_update(lambda _e, key=key: self._layer_changed(key))
+                self.layer_boxes[key] = box
+
+    def _add_param(self, group: str, name: str, meta: dict[str, Any], value: Any) -> None:
+        gui = self.gui
+        label = _label(meta)
+        log = bool(meta.get("log"))
+        if meta.get("choices"):
+            handle = gui.add_dropdown(label, tuple(meta["choices"]), initial_value=value,
+                                      hint=_hint(meta))
+        elif meta["type"] == "bool":
+            handle = gui.add_checkbox(label, bool(value), hint=_hint(meta))
+        elif log:
+            lo, hi = math.log10(meta["log_min"]), math.log10(meta["max"])
+            marks = [(round(x), f"1e{round(x)}") for x in (lo, hi)]
+            if meta.get("paper"):
+                marks.append((math.log10(meta["paper"]), "paper"))
+            handle = gui.add_slider(f"{meta['label']}, log10", lo, hi, 0.1,
+                                    self._to_slider(value, meta), marks=tuple(marks),
+                                    hint=_hint(meta))
+        else:
+            lo, hi, step = meta["min"], meta["max"], meta["step"]
+            marks = ((meta["paper"], "paper"),) if meta.get("paper") is not None else None
+            if (hi - lo) / step <= MAX_SLIDER_POSITIONS:
+                handle = gui.add_slider(label, lo, hi, step, value, marks=marks,
+                                        hint=_hint(meta))
+            else:
+                handle = gui.add_number(label, value, min=lo, max=hi, step=step,
+                                        hint=_hint(meta))
+        handle.on_update(lambda _e, g=group, n=name: self._param_changed(g, n))
+        self.controls[(group, name)] = (handle, log)
+
+    @staticmethod
+    def _to_slider(value: float, meta: dict[str, Any]) -> float:
+        return math.log10(max(float(value), meta["log_min"]))
+
+    def _build_learn(self) -> None:
+        gui = self.gui
+        with gui.add_folder("Explain"):
+            self.lesson_choice = gui.add_dropdown("Layer", tuple(EXPLAIN),
+                                                  initial_value=next(iter(EXPLAIN)))
+            self.lesson = gui.add_markdown(EXPLAIN[self.lesson_choice.value])
+            self.lesson_choice.on_update(
+                lambda _e: setattr(self.lesson, "content", EXPLAIN[self.lesson_choice.value]))
+        with gui.add_folder("Kinematic analysis (Fig. 1-2, eq. 1-5)"):
+            self.theta_slider = gui.add_slider("Pelvic angle [deg]", 0.0, 45.0, 1.0, 0.0)
+            self.analysis_view = gui.add_html(analysis_svg(0.0))
+            self.theta_slider.on_update(lambda _e: setattr(
+                self.analysis_view, "content", analysis_svg(self.theta_slider.value)))
+
+    # -- callbacks (write intent only) -----------------------------------------------------
+    def _say(self, message: str) -> None:
+        self._message = message
+        self._reflected_version = -1  # put the controls back at the values in force
+
+    def _param_changed(self, group: str, name: str) -> None:
+        if self._guarded():
+            return
+        handle, log = self.controls[(group, name)]
+        value = 10.0 ** handle.value if log else handle.value
+        if log:
+            value = float(f"{value:.3g}")
+        if getattr(getattr(self.session.intent.params, group), name) == value:
+            return
+        try:
+            self.session.update_params(**{group: {name: value}})
+        except ValueError as exc:
+            self._say(f"**Not applied:** {html.escape(str(exc))}")
+
+    def _methods_changed(self) -> None:
+        if self._guarded():
+            return
+        chosen = [m for m, box in self.method_boxes.items() if box.value]
+        if not chosen:
+            self._say("**Choose at least one method.**")
+            return
+        self.session.set_methods(chosen)
+
+    def _speed_changed(self) -> None:
+        if self._guarded() or self.speed.value == self.session.intent.speed:
+            return
+        self.session.set_speed(self.speed.value)
+
+    def _toggle_pause(self) -> None:
+        if self.session.intent.paused:
+            self.session.resume()
+        else:
+            self.session.pause()
+
+    def _step(self, which: str) -> None:
+        until = {"5 ms tick": "tick", "to lift-off": "liftoff", "to landing": "landing"}[which]
+        self.session.step(until)
+
+    def _seek(self) -> None:
+        if self._guarded() or not self.session.intent.paused:
+            return
+        try:
+            self.session.seek(float(self.timeline.value))
+        except ValueError as exc:
+            self._say(html.escape(str(exc)))
+
+    def _push(self) -> None:
+        dx, dy = PUSH_DIRECTIONS[self.push_dir.value]
+        f = float(self.push_force.value)
+        try:
+            self.session.push(self.push_robot.value, (f * dx, f * dy), float(self.push_time.value))
+        except ValueError as exc:
+            self._say(f"**Not pushed:** {html.escape(str(exc))}")
+            return
+        self._message = (f"Pushed **{self.push_robot.value}** {self.push_dir.value} with "
+                         f"{f:.0f} N for {self.push_time.value:.2f} s.")
+
+    def _layer_changed(self, key: str) -> None:
+        self.view.scene.set_layer(key, self.layer_boxes[key].value)
+
+    def apply_preset(self, name: str) -> None:
+        """Apply one of :data:`PRESETS`: parameters (and methods); restart the robots together
+        so side-by-side robots compare the same instants."""
+        preset = PRESETS[name]
+        groups = {k: v for k, v in preset.items() if k in GROUPS}
+        base = live_params() if preset.get("reset_groups") else self.session.intent.params
+        self.session.set_params(base.replace(**groups))
+        if "methods" in preset:
+            self.session.set_methods(preset["methods"])
+        self.session.reset()
+
+    # -- reflecting the intent and the frames (display thread) ---------------------------
+    def reflect(self, frame: LiveFrame | None, now: float) -> None:
+        """Move the controls to the intent in force; update status, timeline and plots."""
+        session = self.session
+        intent = session.intent
+        if id(session) != self._session_id:  # the view switched sessions
+            self._session_id = id(session)
+            self.plots.session = session
+            self._reflected_version = -1
+        if intent.version != self._reflected_version:
+            self._local.reflecting = True
+            try:
+                self._reflect_params(intent.params)
+                for method, box in self.method_boxes.items():
+                    box.value = method in intent.methods
+                self.push_robot.options = intent.methods
+                self.speed.value = intent.speed
+                self.pause_button.label = "Resume" if intent.paused else "Pause"
+                self.pause_button.icon = (viser.Icon.PLAYER_PLAY if intent.paused
+                                          else viser.Icon.PLAYER_PAUSE)
+                self.timeline.disabled = not intent.paused
+            finally:
+                self._local.reflecting = False
+            self._reflected_version = intent.version
+        if frame is not None:
+            if frame.paused or now - self._status_time >= 1.0 / STATUS_HZ:
+                self._status_time = now
+                self._update_status(frame, intent.params)
+            self._update_timeline(frame)
+            self.plots.update(frame, now)
+            self.inspector.update(frame, now)
+
+    def _reflect_params(self, params: ControllerParams) -> None:
+        for (group, name), (handle, log) in self.controls.items():
+            value = getattr(getattr(params, group), name)
+            meta = spec(getattr(params, group))[name]
+            shown = self._to_slider(value, meta) if log else value
+            if handle.value != shown:
+                handle.value = shown
+
+    def _update_timeline(self, frame: LiveFrame) -> None:
+        if not frame.paused:
+            return
+        span = self.session.frames.span()
+        if span is None:
+            return
+        self._local.reflecting = True
+        try:
+            lo, hi = round(span[0], 3), round(max(span[1], span[0] + 0.01), 3)
+            if (self.timeline.min, self.timeline.max) != (lo, hi):
+                self.timeline.min, self.timeline.max = lo, hi
+            if abs(self.timeline.value - frame.clock) > 1e-6:
+                self.timeline.value = min(max(frame.clock, lo), hi)
+        finally:
+            self._local.reflecting = False
+
+    def _update_status(self, frame: LiveFrame, params: ControllerParams) -> None:
+        rtf = frame.realtime_factor
+        head = (f"**Paused** at t = {frame.clock:.2f} s" if frame.paused
+                else f"Running at {frame.speed:g}x, real-time factor "
+                + (f"{rtf:.2f}" if rtf is not None else "-"))
+        lines = [head]
+        for r in frame.robots:
+            kappa = f"{r.kappa_legs:.0f}" if math.isfinite(r.kappa_legs) else "-"
+            state = ("standing by to start in phase" if r.waiting
+                     else f"step {max(r.step_index, 0)}, {r.step_length:.2f} m")
+            lines.append(f"**{METHOD_INFO[r.method].title}**: {r.status}, kappa {kappa}, "
+                         f"{state}, falls {r.falls}")
+        lines += [f"⚠ {w}" for w in warnings_for(params)]
+        extra = self.view.alerts()
+        if self._message:
+            extra.append(self._message)
+        text = "  \n".join(extra + lines)
+        if self.status.content != text:
+            self.status.content = text

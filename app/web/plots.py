@@ -1,0 +1,200 @@
+"""The GUI's plots: live metrics per method (Plots tab) and the horizon inspector (Inspect tab).
+
+Both draw published data only: the session's plot rows (:class:`~app.live.history.PlotHistory`)
+and the shown frame's :class:`~app.live.frames.Horizon`. They are updated at a few hertz (a
+plot message carries its whole window, so updating at the display rate would dominate what
+a viewer is sent) and, while paused, whenever the shown instant changes.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+import viser
+import viser.uplot
+
+from app.live.frames import LiveFrame
+from app.live.session import SessionView
+from controller.params import METHOD_INFO
+
+PLOT_HZ = 1.0  # live plot updates per second while running (each carries its whole window)
+INSPECTOR_HZ = 4.0  # horizon inspector updates per second while running
+WINDOWS_S = (12.0, 30.0, 60.0)  # [s] the live plots' x range, chosen in the GUI
+MAX_POINTS = 150  # plot rows sent per series (a longer window is decimated)
+DSP_FILL = "rgba(120, 120, 120, 0.18)"  # shading of the double-support phases
+PLOTS: tuple[tuple[str, str, tuple[float, float]], ...] = (  # (row column, title, min y-span)
+    ("waist_deg", "Waist yaw [deg]", (-30.0, 30.0)),
+    ("waist_rate_deg_s", "Waist yaw rate [deg/s]", (-60.0, 60.0)),
+    ("yaw_momentum", "Yaw momentum [kg m^2/s]", (-0.5, 0.5)),
+    ("kappa", "kappa(J) of the leg columns (eq. 45)", (0.0, 100.0)),
+    ("energy_two_step", "Energy per two steps [J] (eq. 44, as Table 1)", (0.0, 100.0)),
+)
+
+
+def css(rgb: tuple[int, int, int], alpha: float = 1.0) -> str:
+    return f"rgba({rgb[0]}, {rgb[1]}, {rgb[2]}, {alpha})"
+
+
+def _span(values: list[np.ndarray], minimum: tuple[float, float]) -> tuple[float, float]:
+    """A y range holding the data and at least ``minimum``, with some head room."""
+    finite = np.concatenate([v[np.isfinite(v)] for v in values]) if values else np.zeros(0)
+    lo, hi = minimum
+    if len(finite):
+        lo, hi = min(lo, float(finite.min())), max(hi, float(finite.max()))
+    pad = 0.05 * (hi - lo or 1.0)
+    return lo - pad, hi + pad
+
+
+class LivePlots:
+    """Waist angle and rate, yaw momentum, kappa and energy per method, against time."""
+
+    def __init__(self, gui: Any, session: SessionView):
+        self.gui = gui
+        self.session = session
+        self.window = gui.add_dropdown("Window [s]", tuple(f"{w:g}" for w in WINDOWS_S),
+                                       initial_value=f"{WINDOWS_S[0]:g}")
+        self.window.on_update(lambda _e: self._invalidate())
+        self.note = gui.add_markdown(
+            "Grey bands: double support (both feet down). While paused and sought, the plots "
+            "end at the instant shown.")
+        self.folder = gui.add_folder("Plots", expand_by_default=True)
+        self.handles: dict[str, Any] = {}
+        self._scales: dict[str, tuple] = {}
+        self._methods: tuple[str, ...] = ()
+        self._last: tuple[float, float] | None = None  # (frame clock, wall time of update)
+
+    def _invalidate(self) -> None:
+        self._last = None
+
+    def update(self, frame: LiveFrame, now: float) -> None:
+        methods = tuple(r.method for r in frame.robots)
+        if methods != self._methods:
+            self._build(methods)
+        if self._last is not None and (
+            (not frame.paused and now - self._last[1] < 1.0 / PLOT_HZ)
+            or (frame.paused and frame.clock == self._last[0])
+        ):
+            return
+        self._last = (frame.clock, now)
+        seconds = float(self.window.value)
+        window = self.session.history.window(seconds, until=frame.clock)
+        if not methods:
+            return
+        ref = methods[0]
+        clock = window.column(ref, "clock")
+        if len(clock) < 2:
+            return
+        step = max(1, int(math.ceil(len(clock) / MAX_POINTS)))
+        x = (clock - frame.clock)[::step]
+        dsp = window.column(ref, "in_dsp")[::step] == 1.0
+        for col, handle in self.handles.items():
+            ys = []
+            for m in methods:
+                y = window.column(m, col)[::step]
+                ys.append(y if len(y) == len(x) else np.full(len(x), np.nan))
+            spec = next(p for p in PLOTS if p[0] == col)
+            lo, hi = _span(ys, spec[2])
+            band = np.where(dsp, hi, np.nan)
+            handle.data = (x.astype(np.float32), *(y.astype(np.float32) for y in ys),
+                           band.astype(np.float32))
+            scales = (seconds, round(lo, 2), round(hi, 2))
+            if self._scales.get(col) != scales:  # sent only when the ranges change
+                self._scales[col] = scales
+                handle.scales = {"x": viser.uplot.Scale(time=False, range=(-seconds, 0.0)),
+                                 "y": viser.uplot.Scale(range=(scales[1], scales[2]))}
+
+    def _build(self, methods: tuple[str, ...]) -> None:
+        for handle in self.handles.values():
+            handle.remove()
+        self.handles = {}
+        series = (
+            viser.uplot.Series(label="t - now [s]"),
+            *(viser.uplot.Series(label=METHOD_INFO[m].title, stroke=css(METHOD_INFO[m].color),
+                                 width=2) for m in methods),
+            viser.uplot.Series(label="double support", stroke="rgba(0,0,0,0)", fill=DSP_FILL,
+                               fillTo=-1e9, width=0),
+        )
+        empty = tuple(np.zeros(2, dtype=np.float32) for _ in range(len(methods) + 2))
+        with self.folder:
+            for col, title, _span_min in PLOTS:
+                self.handles[col] = self.gui.add_uplot(
+                    data=empty, series=series, title=title, aspect=2.0,
+                    scales={"x": viser.uplot.Scale(time=False, range=(-WINDOWS_S[0], 0.0))},
+                )
+        self._methods = methods
+        self._scales = {}
+        self._last = None
+
+
+class HorizonInspector:
+    """The chosen robot's plan over the horizon at the shown instant (paper Fig. 5-7)."""
+
+    def __init__(self, gui: Any):
+        self.gui = gui
+        self.robot = gui.add_dropdown("Robot", ("mpc",), initial_value="mpc")
+        self.robot.on_update(lambda _e: self._invalidate())
+        self.caption = gui.add_markdown("")
+        grey, black = "rgb(120,120,120)", "rgb(30,30,30)"
+        x_axis = viser.uplot.Series(label="t from now [s]")
+        empty = tuple(np.zeros(2, dtype=np.float32) for _ in range(5))
+        self.com = gui.add_uplot(
+            data=empty, title="Predicted CoM and planned feet, x [m] (eq. 25-26, 20-21)",
+            series=(x_axis, viser.uplot.Series(label="CoM x", stroke="rgb(140,60,200)", width=2),
+                    viser.uplot.Series(label="left foot x", stroke=black, width=1.5),
+                    viser.uplot.Series(label="right foot x", stroke=grey, width=1.5,
+                                       dash=(6, 4)),
+                    viser.uplot.Series(label="CoM y", stroke="rgb(200,120,220)", width=1)),
+            aspect=2.0)
+        self.zmp = gui.add_uplot(
+            data=tuple(np.zeros(2, dtype=np.float32) for _ in range(5)),
+            title="Predicted ZMP y with its reference and bounds [m] (eq. 16-18)",
+            series=(x_axis, viser.uplot.Series(label="ZMP y", stroke="rgb(200,30,60)", width=2),
+                    viser.uplot.Series(label="reference", stroke=black, width=1, dash=(6, 4)),
+                    viser.uplot.Series(label="min", stroke=grey, width=1),
+                    viser.uplot.Series(label="max", stroke=grey, width=1)),
+            aspect=2.0)
+        self.theta = gui.add_uplot(
+            data=tuple(np.zeros(2, dtype=np.float32) for _ in range(3)),
+            title="Pelvic angle over the horizon [deg] (eq. 30-33, 35)",
+            series=(x_axis,
+                    viser.uplot.Series(label="theta_ref (eq. 33)", stroke=black, width=1.5,
+                                       dash=(6, 4)),
+                    viser.uplot.Series(label="theta (MPC, eq. 35)", stroke="rgb(200,30,60)",
+                                       width=2.5)),
+            aspect=2.0)
+        self._key: tuple | None = None
+        self._time = -math.inf
+
+    def _invalidate(self) -> None:
+        self._key = None
+
+    def update(self, frame: LiveFrame, now: float) -> None:
+        methods = tuple(r.method for r in frame.robots)
+        if tuple(self.robot.options) != methods and methods:
+            self.robot.options = methods
+            if self.robot.value not in methods:
+                self.robot.value = "mpc" if "mpc" in methods else methods[0]
+        r = frame.robot(self.robot.value) if methods else None
+        if r is None or r.horizon is None:
+            return
+        key = (frame.seq, r.method)
+        if key == self._key or (not frame.paused and now - self._time < 1.0 / INSPECTOR_HZ
+                                and self._key is not None and self._key[1] == r.method):
+            return
+        self._key, self._time = key, now
+        h = r.horizon
+        t = h.t.astype(np.float32)
+        f32 = np.float32
+        self.com.data = (t, h.com[:, 0].astype(f32), h.left_foot[:, 0].astype(f32),
+                         h.right_foot[:, 0].astype(f32), h.com[:, 1].astype(f32))
+        self.zmp.data = (t, h.zmp[:, 1].astype(f32), h.zmp_ref[:, 1].astype(f32),
+                         h.zmp_lo[:, 1].astype(f32), h.zmp_hi[:, 1].astype(f32))
+        deg = 180.0 / np.pi
+        self.theta.data = (t, (h.theta_ref * deg).astype(f32), (h.theta * deg).astype(f32))
+        phase = "double support" if r.in_dsp else ("single support" if r.step_index >= 0
+                                                     else "standing")
+        self.caption.content = (
+            f"**{METHOD_INFO[r.method].title}** at t = {frame.clock:.2f} s ({phase}, step "
+            f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples.")
