@@ -66,6 +66,8 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="the report /report shows (default: the latest `experiments --out`)",
     )
+    p.add_argument("--methods", nargs="+", choices=METHODS, default=None,
+                   help="the robots every session starts with (default: fixed mpc)")
     p.add_argument("--workers", type=int, default=None,
                    help="worker processes running the robots (default: one per core; 0: in "
                    "this process)")
@@ -193,7 +195,7 @@ def main(argv: list[str] | None = None) -> int:
 
             return serve(args.host, args.port, args.viser_port, args.report_dir, args.workers,
                          args.sessions, args.robots_per_worker, args.display_hz,
-                         args.idle_timeout)
+                         args.idle_timeout, args.methods)
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main
 

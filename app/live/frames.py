@@ -49,6 +49,7 @@ class RobotFrame:
 
     method: str
     slot: int  # position among the robots shown (0 = first)
+    clock: float  # [s] the session clock of this robot's state (its loop's clock)
     t: float  # [s] the robot's own time since its (re)start
     step_index: int  # -1 before the first step, n after the last
     in_dsp: bool
@@ -148,15 +149,16 @@ def horizon_of(session: Session) -> Horizon | None:
     )
 
 
-def robot_frame(session: Session, slot: int, method: str, falls: int, walks: int,
-                last_success: bool | None, waiting: bool, error: str | None) -> RobotFrame:
+def robot_frame(session: Session, slot: int, clock: float, method: str, falls: int,
+                walks: int, last_success: bool | None, waiting: bool,
+                error: str | None) -> RobotFrame:
     """A frame of one robot from its session (called by the loop, at the display rate)."""
     world, out, m = session.world, session.last, session.measured
     model, data = world.model, world.data
     plan = session.plan
     step_index = out.step_index if out is not None else -1
     return RobotFrame(
-        method=method, slot=slot, t=float(session.t), step_index=int(step_index),
+        method=method, slot=slot, clock=clock, t=float(session.t), step_index=int(step_index),
         in_dsp=bool(out is not None and not out.in_ssp and 0 <= step_index < plan.n),
         swing_side=int(out.swing_side) if out is not None else -1,
         step_length=plan.step_length(step_index),

@@ -359,7 +359,7 @@ class LiveLoop:
             intent_version=intent.version, steps_done=self.steps_done,
             pushes_done=self.pushes_done,
             robots=tuple(
-                robot_frame(r.session, slot, r.method, r.falls, r.walks_completed,
+                robot_frame(r.session, slot, self.clock, r.method, r.falls, r.walks_completed,
                             r.last_walk_success, r.waiting, r.error)
                 for slot, r in enumerate(self.robots.values())
             ),

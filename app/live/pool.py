@@ -120,7 +120,7 @@ class RemoteSession(SessionView):
             crtf = [p.compute_realtime_factor for p in parts]
             self._seq += 1
             merged = dataclasses.replace(
-                lead, seq=self._seq,
+                lead, seq=self._seq, clock=min(p.clock for p in parts),  # the slowest part
                 paused=all(p.paused for p in parts),
                 realtime_factor=None if None in rtf else min(rtf),  # type: ignore[type-var]
                 compute_realtime_factor=None if None in crtf else min(crtf),  # type: ignore

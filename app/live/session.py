@@ -50,7 +50,8 @@ def initial_intent(params: ControllerParams | None = None,
     return Intent(params=params, methods=check_methods(methods), speed=check_speed(speed))
 
 
-CATCH_UP_S = 1.0  # [s] a loop this far behind its time base: the base moves (no rush after)
+CATCH_UP_S = 0.3  # [s] a loop this far behind its time base: the base moves (no rush after;
+# the loops of the other parts, ahead of it, wait: a session's robots stay this close)
 
 
 class SessionView:

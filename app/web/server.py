@@ -65,6 +65,7 @@ def serve(
     robots_per_worker: int | None = None,
     display_hz: float | None = None,
     idle_timeout: float | None = None,
+    methods: list[str] | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
@@ -103,7 +104,8 @@ def serve(
         return _fail(f"port {viser_port} on {host} is in use; choose another with --viser-port")
 
     pool = WorkerPool(workers, robots_per_worker, display_hz).start() if workers else None
-    registry = SessionRegistry.start(sessions, initial_intent(), pool, idle_timeout)
+    intent = initial_intent(methods=methods) if methods else initial_intent()
+    registry = SessionRegistry.start(sessions, intent, pool, idle_timeout)
     display = Display(viser_server, registry, display_hz).start()
     app = create_app(registry, viser_port=viser_port, report_dir=report_dir,
                      health_extra=display.health)

@@ -1,0 +1,105 @@
+"""What the real-browser tests share: a ``pelvic-walk serve`` subprocess on free loopback
+ports, Debian's Chromium through Playwright, and moving a viser slider with the mouse."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx
+import pytest
+
+CHROMIUM = "/usr/bin/chromium"
+ROOT = Path(__file__).resolve().parents[1]
+ARTIFACTS = ROOT / "tests" / "artifacts"
+CHROME_ARGS = [
+    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+]
+needs_chromium = [
+    pytest.mark.browser,
+    pytest.mark.skipif(not os.path.exists(CHROMIUM),
+                       reason=f"{CHROMIUM} is missing (apt-get install chromium)"),
+]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@contextlib.contextmanager
+def serving(*args: str) -> Iterator[tuple[str, str, subprocess.Popen]]:
+    """``pelvic-walk serve`` with ``args``; yields (API base URL, viser URL, process)."""
+    port, viser_port = free_port(), free_port()
+    exe = Path(sys.executable).with_name("pelvic-walk")
+    proc = subprocess.Popen(
+        [str(exe), "serve", "--port", str(port), "--viser-port", str(viser_port), *args],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+    )
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline:
+            if proc.poll() is not None:
+                pytest.fail(f"serve exited with {proc.returncode}: {proc.stdout.read()[-2000:]}")
+            try:
+                if httpx.get(f"{base}/api/health", timeout=1).status_code == 200:
+                    break
+            except httpx.HTTPError:
+                time.sleep(0.3)
+        else:
+            pytest.fail("serve did not answer /api/health within 120 s")
+        yield base, f"http://127.0.0.1:{viser_port}/", proc
+    finally:
+        proc.send_signal(signal.SIGINT)
+        try:
+            proc.wait(20)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait(5)
+
+
+def wait_for(check, timeout: float = 30.0, every: float = 0.3):
+    """Poll ``check()`` until it returns something truthy; that value, or None."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        value = check()
+        if value:
+            return value
+        time.sleep(every)
+    return None
+
+
+def slider(frame, label: str):
+    """The ``role=slider`` thumb and the track box of a viser slider, by its label."""
+    handle = frame.locator("label", has_text=label).first
+    handle.wait_for(timeout=60_000)
+    root = frame.locator(f'[id="{handle.get_attribute("for")}"]')
+    return root.locator('[role="slider"]'), root.locator(".mantine-Slider-track")
+
+
+def click_slider(page, frame, label: str, value: float) -> None:
+    """Click a slider's track where ``value`` lies (keyboard arrows would move the camera)."""
+    thumb, track = slider(frame, label)
+    track.scroll_into_view_if_needed()
+    box = track.bounding_box()
+    lo, hi = float(thumb.get_attribute("aria-valuemin")), float(
+        thumb.get_attribute("aria-valuemax"))
+    page.mouse.click(box["x"] + (value - lo) / (hi - lo) * box["width"],
+                     box["y"] + box["height"] / 2)
+
+
+def close_notice(frame) -> None:
+    """Close viser's 'Software WebGL rendering' toast (headless Chromium has no GPU)."""
+    button = frame.locator(".mantine-Notification-closeButton")
+    if button.count():
+        button.first.click()

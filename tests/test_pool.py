@@ -1,0 +1,119 @@
+"""Sessions in worker processes: robots split across workers keep step; admission; a worker
+that dies is reported, replaced, and its sessions restart; closing frees the slots."""
+
+from __future__ import annotations
+
+import os
+import signal
+import time
+
+import pytest
+
+from app.live.pool import PoolFull, WorkerPool
+from app.live.registry import SessionRegistry
+from app.live.session import initial_intent
+from app.web.api import create_app
+from controller.params import ControllerParams
+
+PARAMS = ControllerParams().replace(walk={"n_steps": 40})
+
+
+@pytest.fixture(scope="module")
+def pool():
+    p = WorkerPool(2, robots_per_worker=2).start()
+    yield p
+    p.stop()
+
+
+def _walked(session, seconds: float):
+    """The session's frame once its clock has advanced ``seconds`` from now."""
+    f = session.wait_frame(timeout=60)
+    assert f is not None
+    start = f.clock
+    while f is not None and f.clock < start + seconds:
+        f = session.wait_frame(f.seq, timeout=30)
+    assert f is not None
+    return f
+
+
+def test_a_session_split_across_workers_keeps_step(pool):
+    s = pool.open(initial_intent(PARAMS, ["fixed", "redundancy", "mpc"]), sid="split")
+    try:
+        placed = {w["index"]: w["robots"] for w in pool.workers()}
+        assert sorted(len(r) for r in placed.values()) == [1, 2]  # every core used
+        f = _walked(s, 3.0)
+        assert [r.method for r in f.robots] == ["fixed", "redundancy", "mpc"]
+        assert [r.slot for r in f.robots] == [0, 1, 2]
+        # one time base: the robots started together (robot time = part clock - start clock)
+        starts = [r.clock - r.t for r in f.robots]
+        assert max(starts) - min(starts) < 0.011, starts  # two ticks
+        # and the parts keep within the catch-up margin of each other
+        clocks = [r.clock for r in f.robots]
+        assert max(clocks) - min(clocks) < 0.5, clocks
+        assert all(not r.fell for r in f.robots)
+        # intent reaches every part; the session's rows merge one set per robot
+        ticket = s.update_params(walk={"step_length": 0.25})
+        f = s.wait_applied(ticket, timeout=20)
+        assert f is not None and all(r.params.walk.step_length == 0.25 for r in f.robots)
+        assert set(s.history.window().rows) == {"fixed", "redundancy", "mpc"}
+        # pause and a single step reach every part
+        f = s.wait_applied(s.pause(), timeout=20)
+        before = [r.t for r in f.robots]
+        f = s.wait_applied(s.step(), timeout=20)
+        assert [round(r.t - b, 6) for r, b in zip(f.robots, before, strict=True)] == [
+            0.005] * 3
+    finally:
+        pool.close(s)
+    assert pool.robots() == 0
+
+
+def test_admission_and_closing_free_the_slots(pool):
+    a = pool.open(initial_intent(PARAMS, ["fixed", "mpc"]), sid="a")
+    b = pool.open(initial_intent(PARAMS, ["fixed", "mpc"]), sid="b")
+    try:
+        assert pool.robots() == 4 == pool.capacity
+        with pytest.raises(PoolFull, match="room"):
+            pool.open(initial_intent(PARAMS, ["mpc"]))
+        with pytest.raises(PoolFull):
+            a.set_methods(["fixed", "redundancy", "mpc"])
+        assert a.intent.methods == ("fixed", "mpc")  # refused: nothing changed
+        pool.close(b)
+        assert pool.robots() == 2
+        c = pool.open(initial_intent(PARAMS, ["mpc"]), sid="c")
+        assert _walked(c, 1.0).robots[0].method == "mpc"
+        pool.close(c)
+    finally:
+        pool.close(a)
+        pool.close(b)
+
+
+def test_a_dead_worker_is_reported_replaced_and_its_sessions_restart(pool):
+    registry = SessionRegistry.start("shared", initial_intent(PARAMS, ["fixed", "mpc"]), pool)
+    app = create_app(registry)
+    from fastapi.testclient import TestClient
+
+    try:
+        with TestClient(app) as client:
+            shared = registry.shared
+            _walked(shared, 1.0)
+            victim = next(w for w in pool.workers() if w["robots"])
+            os.kill(victim["pid"], signal.SIGKILL)
+            deadline = time.monotonic() + 90
+            health = client.get("/api/health").json()
+            while time.monotonic() < deadline and not (
+                health["worker_deaths"] and all(w["alive"] for w in health["workers"])
+                and health["status"] == "ok"
+            ):
+                time.sleep(0.5)
+                health = client.get("/api/health").json()
+            assert health["worker_deaths"], health
+            assert f"pid {victim['pid']}" in health["worker_deaths"][-1]
+            assert "1 session restarted" in health["worker_deaths"][-1]
+            assert health["status"] == "ok" and victim["pid"] not in [
+                w["pid"] for w in health["workers"]]
+            # the session walks again on the new worker: its robots restarted together
+            f = _walked(shared, 2.0)
+            assert all(not r.fell for r in f.robots)
+            assert client.get("/api/state").status_code == 200
+    finally:
+        registry.shutdown()
