@@ -94,6 +94,7 @@ def closed_loop(ticks: int) -> dict[str, Any]:
     for _ in range(warm):
         session.tick()
     layer_s: list[dict[str, float]] = []
+    split0 = dict(session.time_split)
     cpu0 = time.process_time()
     start = time.perf_counter()
     for _ in range(ticks):  # what run() does per tick
@@ -109,6 +110,10 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         "layer_ms": {
             name: float(np.median([d[name] for d in layer_s])) * 1e3 for name in layer_s[0]
         },
+        # mean per tick: the controller, MuJoCo (the substeps and their copies) and the
+        # measurement (contacts, CoP, support polygon, series row, bookkeeping)
+        "time_split_ms": {k: (v - split0[k]) / ticks * 1e3
+                          for k, v in session.time_split.items()},
         "sim_time": sim_time,
         "wall_time": wall,
         "cpu_time": cpu,
@@ -119,6 +124,35 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         "sim_dt": session.world.sim_dt,
         "control_dt": session.params.control_dt,
     }
+
+
+def live_loop(ticks: int) -> dict[str, Any]:
+    """One robot in a live loop, unpaced, its frames pickled at the display rate as a worker
+    sends them: how many robots one worker process holds at 1.0x real time."""
+    import pickle
+
+    from app.live.loop import LiveLoop
+    from app.live.session import initial_intent
+
+    intent = initial_intent(bench_params(ticks), [METHOD])
+    sent = [0]
+
+    def publish(frame: Any) -> None:
+        sent[0] += len(pickle.dumps(frame, protocol=pickle.HIGHEST_PROTOCOL))
+
+    loop = LiveLoop(lambda: intent, publish, sleep=lambda _s: None)
+    loop.iterate()  # build the robot
+    warm = int(round(1.0 / intent.params.control_dt))
+    for _ in range(warm):
+        loop.iterate()
+    start, clock0 = time.perf_counter(), loop.clock
+    for _ in range(ticks):
+        loop.iterate()
+    rtf = (loop.clock - clock0) / (time.perf_counter() - start)
+    return {"live_loop_realtime_factor": rtf,
+            # headroom kept for frames, plot rows and the scheduler of a busy machine
+            "robots_per_worker": max(1, int(np.floor(0.8 * rtf))),
+            "frame_bytes_per_s": sent[0] / (time.perf_counter() - start)}
 
 
 def tick_cpu_ms(ticks: int) -> np.ndarray:
@@ -275,6 +309,7 @@ def run_bench(ticks: int = 600) -> dict[str, Any]:
     loop_rtf_cpu = loop["sim_time"] / loop["cpu_time"]
     bare_rtf_cpu = bare_sim / bare_cpu
     tick_cpu = tick_cpu_ms(ticks)
+    live = live_loop(ticks)
     qp = compare_backends(record_qps(ticks))
     return {
         "tick_ms_median": loop["tick_ms_median"],
@@ -283,6 +318,9 @@ def run_bench(ticks: int = 600) -> dict[str, Any]:
         "realtime_factor": loop["realtime_factor"],
         "bare_step_realtime_factor": bare_rtf,
         "overhead_ratio": bare_rtf / loop["realtime_factor"],
+        "robots_per_worker": live["robots_per_worker"],
+        "live_loop_realtime_factor": live["live_loop_realtime_factor"],
+        "time_split_ms": loop["time_split_ms"],
         # extras
         "tick_ms_max": loop["tick_ms_max"],
         "tick_ms_cpu_median": float(np.median(tick_cpu)),
@@ -331,6 +369,10 @@ def format_report(r: dict[str, Any]) -> str:
         "per layer (median)   "
         + "   ".join(f"{k} {v:.3f}" for k, v in r["layer_ms"].items())
         + "  [ms]",
+        "time per tick        "
+        + "   ".join(f"{k} {v:.3f}" for k, v in r["time_split_ms"].items()) + "  [ms]",
+        f"live loop            real-time factor {r['live_loop_realtime_factor']:.1f} (one "
+        f"robot, frames included): a worker holds {r['robots_per_worker']} robots at 1.0x",
         f"real-time factor     closed loop {r['realtime_factor']:.1f}   MuJoCo alone "
         f"{r['bare_step_realtime_factor']:.1f}   overhead ratio {r['overhead_ratio']:.2f}   "
         f"(CPU time: {r['realtime_factor_cpu']:.1f} / {r['bare_step_realtime_factor_cpu']:.1f}"

@@ -153,10 +153,18 @@ def log3(R: np.ndarray) -> np.ndarray:
 
 
 def pose_error(T_cur: np.ndarray, T_des: np.ndarray) -> np.ndarray:
-    """[p_des - p_cur; log3(R_des R_cur^T)] (6,), both poses (4, 4) in the same frame."""
+    """[p_des - p_cur; log3(R_des R_cur^T)] (6,), both poses (4, 4) in the same frame.
+
+    ``T_des`` may be a position (3,): a flat foot, R_des = I, so the rotation error is
+    log3(R_cur^T) (the walker's feet never turn).
+    """
     e = np.empty(6)
-    e[:3] = T_des[:3, 3] - T_cur[:3, 3]
-    e[3:] = log3(T_des[:3, :3] @ T_cur[:3, :3].T)
+    if T_des.ndim == 1:
+        e[:3] = T_des - T_cur[:3, 3]
+        e[3:] = log3(T_cur[:3, :3].T)
+    else:
+        e[:3] = T_des[:3, 3] - T_cur[:3, 3]
+        e[3:] = log3(T_des[:3, :3] @ T_cur[:3, :3].T)
     return e
 
 
@@ -171,9 +179,10 @@ def foot_velocity_command(
 ) -> np.ndarray:
     """Desired foot twists for eq. (39): feed-forward + gain * pose error, per foot.
 
-    All poses (4, 4) and twists (6,) = [linear; angular] are in the pelvis frame. The rotation
-    error ``log3(R_des R_cur^T)`` is expressed in that same frame, matching the angular part of
-    the twist.
+    All poses (4, 4) and twists (6,) = [linear; angular] are in the pelvis frame; a desired
+    pose given as a position (3,) is a flat foot (:func:`pose_error`). The rotation error
+    ``log3(R_des R_cur^T)`` is expressed in that same frame, matching the angular part of the
+    twist.
 
     Returns:
         (12,) [left twist (6); right twist (6)].

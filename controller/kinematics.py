@@ -26,11 +26,13 @@ Conventions:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg.lapack import dsyevd
 
 from models.dyros_jet import (
     ARM_QP_JOINTS,
@@ -193,9 +195,11 @@ def jacobian_conditions(J_low: np.ndarray) -> tuple[float, float]:
     J = np.asarray(J_low, dtype=float)
     legs = J[:, 1:] @ J[:, 1:].T  # (12, 12), block diagonal: each foot on its own leg
     w = J[:, 0]
-    lam = np.linalg.eigvalsh(np.stack((legs + np.outer(w, w), legs)))  # (2, 12) ascending
-    lo, hi = np.sqrt(np.maximum(lam[:, 0], 0.0)), np.sqrt(np.maximum(lam[:, -1], 0.0))
-    return _kappa(float(hi[0]), float(lo[0])), _kappa(float(hi[1]), float(lo[1]))
+    out = []
+    for G in (legs + np.outer(w, w), legs):  # LAPACK directly: numpy's wrapper costs more
+        lam = dsyevd(G, compute_v=0)[0]  # ascending
+        out.append(_kappa(math.sqrt(max(lam[-1], 0.0)), math.sqrt(max(lam[0], 0.0))))
+    return out[0], out[1]
 
 
 def _kappa(s_max: float, s_min: float, floor: float = _EPS) -> float:

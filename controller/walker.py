@@ -253,9 +253,9 @@ class Walker:
         v_ff_l[:3] = plan.v_left[1] - v_world_pelvis
         v_ff_r = np.zeros(6)
         v_ff_r[:3] = plan.v_right[1] - v_world_pelvis
-        v_des = foot_velocity_command(
-            ks.T_pelvis_left_sole, _pose(p_des_l), v_ff_l,
-            ks.T_pelvis_right_sole, _pose(p_des_r), v_ff_r, p.ik.foot_gain,
+        v_des = foot_velocity_command(  # flat feet: desired poses given as positions
+            ks.T_pelvis_left_sole, p_des_l, v_ff_l,
+            ks.T_pelvis_right_sole, p_des_r, v_ff_r, p.ik.foot_gain,
         )
         q_low = self.q_cmd[lower]
         qp = build_ik(
@@ -359,11 +359,3 @@ class Walker:
     def replace_params(self, **groups) -> None:
         """Convenience: ``w.replace_params(walk=dict(step_length=0.3))``."""
         self.set_params(self.snapshot_params().replace(**groups))
-
-
-def _pose(p: np.ndarray) -> np.ndarray:
-    """4x4 pose with identity rotation (feet flat, facing forward) at position p."""
-    T = np.eye(4)
-    T[:3, 3] = p
-    return T
-

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import time
 
 import pytest
@@ -85,6 +86,11 @@ def test_put_params_partial_reaches_the_walkers(client, live):
     got = client.get("/api/params").json()
     assert got["walk"]["step_length"] == 0.25 and got["com"]["alpha"] == 2.0
     _wait_newer(live)  # one tick later every walker has taken them
+    for _ in range(200):  # (a robot standing by to restart in phase takes them at its start)
+        if not any(r.waiting for r in live.frame().robots):
+            break
+        _wait_newer(live, 1)
+    _wait_newer(live, 2)
     for method, robot in live.robots.items():
         params = robot.session.walker.params
         assert params.walk.step_length == 0.25 and params.com.alpha == 2.0
@@ -463,3 +469,79 @@ def test_path_traversal_of_the_docs_assets_gets_404(raw_server):
     for target in ("/docs-assets/../__init__.py", "/docs-assets/..%2f..%2ffastapi/__init__.py"):
         status, body = _raw_get(port, target)
         assert status == 404 and b"import" not in body
+
+
+def test_horizon_has_one_value_per_sample_and_follows_the_horizon(client, live):
+    for _ in range(100):  # an earlier test may have restarted the robots: they start together
+        r = client.get("/api/horizon", params={"method": "mpc"})
+        if r.status_code != 409:
+            break
+        _wait_newer(live, 1)
+    if r.status_code != 200:
+        open("/tmp/state.json", "w").write(json.dumps(client.get("/api/state").json(), indent=1))
+    assert r.status_code == 200, r.text
+    body = r.json()
+    keys = ("t", "com_x", "com_y", "zmp_x", "zmp_y", "zmp_ref_x", "zmp_ref_y", "zmp_min_x",
+            "zmp_max_x", "zmp_min_y", "zmp_max_y", "left_foot_x", "left_foot_y",
+            "right_foot_x", "right_foot_y", "theta_ref_deg", "theta_deg")
+    params = live.intent.params.com
+    n = round(params.horizon / params.sample_time)
+    assert all(len(body[k]) == n for k in keys), {k: len(body[k]) for k in keys}
+    t = body["t"]
+    assert all(b > a for a, b in zip(t, t[1:], strict=False))
+    assert t[-1] == pytest.approx(params.horizon, abs=1e-6)
+    assert all(lo <= z + 1e-6 and z <= hi + 1e-6 for lo, z, hi in zip(
+        body["zmp_min_y"], body["zmp_y"], body["zmp_max_y"], strict=True))
+    r = client.put("/api/params", json={"com": {"horizon": 1.2}})
+    assert r.status_code == 200
+    _wait_newer(live, 2)  # the next tick plans over the new horizon
+    short = client.get("/api/horizon", params={"method": "mpc"}).json()
+    assert len(short["t"]) == 12 and short["t"][-1] == pytest.approx(1.2, abs=1e-6)
+    client.put("/api/params", json={"com": {"horizon": 1.6}})
+    assert client.get("/api/horizon", params={"method": "walk"}).status_code == 422
+    fixed = client.get("/api/horizon", params={"method": "fixed"}).json()
+    assert fixed["theta_deg"] == [pytest.approx(fixed["theta_deg"][0])] * len(fixed["t"])
+
+
+def test_seek_shows_a_kept_instant_while_paused(client, live):
+    assert client.post("/api/sim/seek", json={"t": 0.5}).status_code == 409  # running
+    _wait_newer(live, 10)
+    client.post("/api/sim/pause")
+    state = client.get("/api/state").json()
+    assert state["shown_t"] is None and state["kept"]["frames"] > 1
+    start, end = state["kept"]["start"], state["kept"]["end"]
+    target = (start + end) / 2
+    r = client.post("/api/sim/seek", json={"t": target})
+    assert r.status_code == 200, r.text
+    sought = client.get("/api/state").json()
+    assert sought["shown_t"] == pytest.approx(target, abs=0.1)
+    assert sought["clock"] == pytest.approx(sought["shown_t"])
+    assert client.get("/api/horizon").json()["clock"] == pytest.approx(sought["shown_t"])
+    assert client.post("/api/sim/seek", json={"t": "soon"}).status_code == 422
+    assert client.post("/api/sim/seek", json={}).status_code == 422
+    client.post("/api/sim/resume")
+    assert client.get("/api/state").json()["shown_t"] is None
+
+
+def test_push_is_applied_or_refused_with_a_message(client, live):
+    r = client.post("/api/sim/push", json={"method": "mpc", "force": [0, 40], "duration": 0.1})
+    assert r.status_code == 200 and r.json()["applied"] is True
+    for body in ({"method": "redundancy", "force": [0, 40]},  # not shown
+                 {"method": "mpc", "force": [0, 1000]},  # above the maximum
+                 {"method": "mpc", "force": [0, 40], "duration": 5.0},
+                 {"method": "mpc", "force": [0, "x"]}):
+        r = client.post("/api/sim/push", json=body)
+        assert r.status_code == 422, (body, r.text)
+        assert r.json()["detail"]
+    _assert_still_running(client, live)
+
+
+def test_sessions_are_listed_and_addressed(client):
+    body = client.get("/api/sessions").json()
+    assert body["mode"] == "shared" and [s["id"] for s in body["sessions"]] == ["shared"]
+    assert client.get("/api/sessions/shared/state").status_code == 200
+    assert client.get("/api/state", headers={"X-Pelvic-Session": "shared"}).status_code == 200
+    assert client.get("/api/sessions/nope/state").status_code == 404
+    assert client.get("/api/state", headers={"X-Pelvic-Session": "nope"}).status_code == 404
+    assert client.post("/api/sessions").status_code == 409  # shared mode
+    assert client.delete("/api/sessions/shared").status_code == 409

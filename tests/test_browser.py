@@ -1,151 +1,123 @@
-"""One real-browser test: the page, the framed viser scene and GUI, and a slider that acts.
+"""Real-browser tests of the shared-mode page: the framed viser scene and GUI, a slider that
+acts, pause and scrub with the timeline, the camera views, and ``/docs`` without internet.
 
-Starts ``pelvic-walk serve`` in a subprocess on free localhost ports, opens the page in
-Debian's Chromium through Playwright, moves the "Step length [m]" slider inside the viser
-iframe with a mouse click on its track, and checks through ``GET /api/state``
-that the robots walk with the new step length. Saves ``tests/artifacts/browser.png``.
+Starts ``pelvic-walk serve`` in a subprocess on free localhost ports and drives Debian's
+Chromium through Playwright. Screenshots go to ``tests/artifacts/`` (looked at by people;
+nothing here asserts on pixels).
 """
 
 from __future__ import annotations
 
-import os
-import signal
-import socket
-import subprocess
-import sys
 import time
-from pathlib import Path
 
 import httpx
 import pytest
+from browser_util import (
+    ARTIFACTS,
+    CHROME_ARGS,
+    CHROMIUM,
+    click_slider,
+    close_notice,
+    needs_chromium,
+    serving,
+    slider,
+    wait_for,
+)
 
-CHROMIUM = "/usr/bin/chromium"
-ROOT = Path(__file__).resolve().parents[1]
-ARTIFACTS = ROOT / "tests" / "artifacts"
-CHROME_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
-]
-
-pytestmark = [
-    pytest.mark.browser,
-    pytest.mark.skipif(not os.path.exists(CHROMIUM),
-                       reason=f"{CHROMIUM} is missing (apt-get install chromium)"),
-]
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+pytestmark = needs_chromium
 
 
 @pytest.fixture(scope="module")
 def server():
-    port, viser_port = _free_port(), _free_port()
-    exe = Path(sys.executable).with_name("pelvic-walk")
-    proc = subprocess.Popen(
-        [str(exe), "serve", "--port", str(port), "--viser-port", str(viser_port)],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
-    )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + 60
-        while time.monotonic() < deadline:
-            if proc.poll() is not None:
-                pytest.fail(f"serve exited with {proc.returncode}: {proc.stdout.read()[-2000:]}")
-            try:
-                if httpx.get(f"{base}/api/health", timeout=1).status_code == 200:
-                    break
-            except httpx.HTTPError:
-                time.sleep(0.3)
-        else:
-            pytest.fail("serve did not answer /api/health within 60 s")
+    with serving() as (base, _viser_url, _proc):
         yield base
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(5)
 
 
 def _robots(base: str) -> list[dict]:
     return httpx.get(f"{base}/api/state", timeout=5).json()["robots"]
 
 
-def test_page_scene_gui_and_step_length_slider(server):
+def test_page_scene_gui_slider_timeline_and_views(server):
     from playwright.sync_api import sync_playwright
 
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     with sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
         try:
-            page = browser.new_page(viewport={"width": 1400, "height": 860})
+            page = browser.new_page(viewport={"width": 1400, "height": 900})
             page.goto(server + "/")
             assert "pelvic-walk" in page.title()
             assert page.locator("header a[href='/docs']").count() == 1
-
             scene = page.frame_locator("#scene")
-            scene.locator("canvas").first.wait_for(state="visible", timeout=30_000)
-            label = scene.locator("label", has_text="Step length [m]")
-            label.wait_for(timeout=30_000)
-            for folder in ("Presets", "Walk", "Compare", "Playback"):
+            scene.locator("canvas").first.wait_for(state="visible", timeout=60_000)
+            thumb, _track = slider(scene, "Step length [m]")
+            for folder in ("Presets", "Walk", "Compare", "Playback", "View"):
                 assert scene.get_by_text(folder, exact=True).count() >= 1
+            close_notice(scene)
 
-            # Move the slider: click its track where 0.30 m lies (keyboard arrows would also
-            # reach viser's camera controls and turn the view).
-            slider_id = label.get_attribute("for")
-            root = scene.locator(f'[id="{slider_id}"]')
-            thumb = root.locator('[role="slider"]')
+            # The step-length slider: the parameters, then the robots from their next step.
             assert float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.2)
-            track = root.locator(".mantine-Slider-track").bounding_box()
-            lo, hi = float(thumb.get_attribute("aria-valuemin")), float(
-                thumb.get_attribute("aria-valuemax"))
-            frac = (0.30 - lo) / (hi - lo)
-            page.mouse.click(track["x"] + frac * track["width"],
-                             track["y"] + track["height"] / 2)
+            click_slider(page, scene, "Step length [m]", 0.30)
             assert float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.3)
-
-            deadline = time.monotonic() + 20
-            while time.monotonic() < deadline:
-                params = httpx.get(f"{server}/api/params", timeout=5).json()
-                if params["walk"]["step_length"] == pytest.approx(0.3):
-                    break
-                time.sleep(0.2)
-            assert params["walk"]["step_length"] == pytest.approx(0.3)
-
-            # The robots take the new length from their next step on.
-            deadline = time.monotonic() + 30
-            while time.monotonic() < deadline:
-                robots = _robots(server)
-                if all(r["step_length"] == pytest.approx(0.3) and r["step_index"] >= 0
-                       for r in robots):
-                    break
-                time.sleep(0.3)
-            assert all(r["step_length"] == pytest.approx(0.3) for r in robots), robots
-            assert all(r["params"]["step_length"] == pytest.approx(0.3) for r in robots)
-
-            # An API change moves the slider in the GUI (the GUI reflects PUT /api/params).
+            assert wait_for(lambda: httpx.get(f"{server}/api/params").json()["walk"][
+                "step_length"] == pytest.approx(0.3))
+            robots = wait_for(lambda: (rs := _robots(server)) and all(
+                r["step_length"] == pytest.approx(0.3) and r["step_index"] >= 0
+                for r in rs) and rs, timeout=60)
+            assert robots and all(r["params"]["step_length"] == pytest.approx(0.3)
+                                  for r in robots)
+            # An API change moves the slider (the GUI reflects PUT /api/params).
             r = httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.25}})
             assert r.status_code == 200
-            deadline = time.monotonic() + 10
-            while time.monotonic() < deadline:
-                if float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.25):
-                    break
-                time.sleep(0.2)
-            assert float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.25)
+            assert wait_for(lambda: float(thumb.get_attribute("aria-valuenow"))
+                            == pytest.approx(0.25))
 
-            # Screenshots: the controls, then the live plots.
-            notice = scene.get_by_text("Software WebGL rendering detected")
-            if notice.count():  # headless Chromium renders without a GPU; not our message
-                scene.locator(".mantine-Notification-closeButton").first.click()
-            time.sleep(1.0)
-            page.screenshot(path=str(ARTIFACTS / "browser.png"))
-            scene.get_by_role("tab", name="Plots").click()
-            time.sleep(2.0)
-            page.screenshot(path=str(ARTIFACTS / "browser_plots.png"))
+            # Three robots at 0.3 m from the default camera, then the plots with phases.
+            httpx.put(f"{server}/api/params", json={
+                "methods": ["fixed", "redundancy", "mpc"], "walk": {"step_length": 0.3}})
+            time.sleep(12)
+            page.screenshot(path=str(ARTIFACTS / "three_robots.png"))
+            scene.get_by_role("tab", name="Plots").first.click()
+            scene.get_by_text("Waist yaw [deg]").first.wait_for(state="visible")
+            time.sleep(3)
+            page.screenshot(path=str(ARTIFACTS / "plots.png"))
+            scene.get_by_role("tab", name="Controls").first.click()
+
+            # Pause, then move the timeline back: the scene, the API show the kept instant.
+            scene.get_by_role("button", name="Pause").click()
+            state = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())["paused"]
+                             and s)
+            assert state and state["shown_t"] is None
+            kept = state["kept"]
+            assert kept["end"] - kept["start"] > 10.0
+            timeline, _t = slider(scene, "Timeline [s] (paused)")
+            assert wait_for(lambda: timeline.get_attribute("data-disabled") is None)
+            click_slider(page, scene, "Timeline [s] (paused)",
+                         kept["end"] - 10.0)  # ten seconds back
+            sought = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())[
+                "shown_t"] is not None and s)
+            assert sought, "the timeline did not seek"
+            assert sought["shown_t"] == pytest.approx(kept["end"] - 10.0, abs=0.5)
+            assert sought["clock"] == pytest.approx(sought["shown_t"])
+            time.sleep(2)
+            page.screenshot(path=str(ARTIFACTS / "scrubbed_10s_back.png"))
+            scene.get_by_role("button", name="Resume").click()
+            back = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())[
+                "shown_t"] is None and not s["paused"] and s)
+            assert back and back["clock"] >= kept["end"]
+
+            # The camera views, and the horizon inspector at 0.4 m (Fig. 5-7).
+            for view in ("side", "top"):
+                scene.get_by_role("button", name=view, exact=True).click()
+                time.sleep(2)
+                page.screenshot(path=str(ARTIFACTS / f"view_{view}.png"))
+            scene.get_by_role("button", name="follow", exact=True).click()
+            httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.4}})
+            time.sleep(6)
+            scene.get_by_role("tab", name="Inspect").first.click()
+            scene.get_by_text("horizon 1.6 s, 16 samples").first.wait_for(state="visible")
+            time.sleep(3)
+            page.screenshot(path=str(ARTIFACTS / "inspector_040.png"))
         finally:
             browser.close()
 

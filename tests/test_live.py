@@ -104,6 +104,15 @@ def running():
         assert sim.error is None
 
 
+def _started(sim: LiveSim):
+    """The first frame in which every robot has ticked (they start together after a delay)."""
+    f = sim.frame()
+    while f is not None and any(r.t <= 0.0 or r.waiting for r in f.robots):
+        f = sim.wait_frame(f.seq, timeout=30)
+    assert f is not None
+    return f
+
+
 def _advance(sim: LiveSim, frames: int = 3):
     f = sim.frame()
     for _ in range(frames):
@@ -145,18 +154,27 @@ def test_params_reach_every_walker_and_methods_rebuild(running):
 
 
 def test_a_finished_plan_restarts(running):
-    sim = running(params=short_params(1), methods=["mpc"], speed=4.0)
+    sim = running(params=short_params(1), methods=["fixed", "mpc"], speed=4.0)
     f = sim.frame()
-    while f is not None and f.robots[0].walks_completed == 0:
+    while f is not None and any(r.walks_completed == 0 for r in f.robots):
         f = sim.wait_frame(f.seq, timeout=60)
     assert f is not None
-    r = f.robots[0]
-    assert r.walks_completed == 1 and r.last_walk_success is True and r.t < 0.5
-    assert np.all(np.isfinite(r.body_xpos))
+    finished = f.clock
+    while f is not None and any(r.waiting or r.t < 0.05 for r in f.robots):
+        f = sim.wait_frame(f.seq, timeout=60)
+    assert f is not None
+    # both walk again together within one two-step cycle (not after the give-up wait)
+    cycle = 2 * f.robots[0].params.walk.step_time
+    assert f.clock - finished < cycle + 0.5, (finished, f.clock)
+    for r in f.robots:
+        assert r.walks_completed == 1 and r.last_walk_success is True and r.t < 0.5
+        assert np.all(np.isfinite(r.body_xpos))
+    assert abs(f.robots[0].t - f.robots[1].t) < 0.011
 
 
 def test_a_fallen_robot_is_reset_after_a_while(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"], speed=4.0)
+    _started(sim)
     sim.wait_applied(sim.pause())
     robot = sim.robots["fixed"]
     robot.session.fell = True  # as the world's fall check would mark it
@@ -183,3 +201,59 @@ def test_history_has_one_column_set_per_method(running):
         assert arr.shape[1] == len(ROW_COLUMNS)
         assert np.all(np.isfinite(h.column(method, "waist_deg")))
         assert np.all(np.diff(h.column(method, "clock")) > 0)
+
+
+def test_history_and_kept_frames_are_bounded():
+    """Run unpaced for 20 s of simulated time keeping 3 s: memory stops growing."""
+    sim = LiveSim(short_params(20), methods=["fixed", "mpc"], sleep=lambda _s: None,
+                  keep_s=3.0, publish_hz=200.0)
+    sim.history = type(sim.history)(seconds=8.0)
+    sim.start()
+    try:
+        f = sim.wait_frame(timeout=30)
+        sizes = []  # (clock, bytes kept)
+        while f is not None and f.clock < 20.0:
+            f = sim.wait_frame(f.seq, timeout=30)
+            if f is not None and f.seq % 50 == 0:
+                sizes.append((f.clock, sim.frames.nbytes()))
+        assert f is not None
+        lo, hi = sim.frames.span()
+        assert hi - lo <= 3.0 + 1e-6
+        full = max(b for c, b in sizes if 3.0 < c <= 6.0)  # one window, full
+        assert max(b for c, b in sizes if c > 6.0) < 1.5 * full  # no growth after
+        rows = sim.history.window().rows
+        assert all(len(a) <= sim.history.capacity for a in rows.values())
+        assert max(len(a) for a in rows.values()) == sim.history.capacity
+    finally:
+        sim.stop()
+
+
+def test_step_to_the_next_liftoff_and_landing(running):
+    sim = running(params=short_params(3), methods=["mpc"])
+    f = sim.wait_applied(sim.pause(), timeout=10)
+    f = sim.wait_applied(sim.step("liftoff"), timeout=30)
+    r = f.robots[0]
+    plan = sim.robots["mpc"].session.plan
+    assert not r.in_dsp and r.step_index >= 0
+    assert min(abs(r.t - t) for t in plan.liftoff_times()) <= 2 * DT + 1e-9  # its tick
+    f = sim.wait_applied(sim.step("landing"), timeout=30)
+    r = f.robots[0]
+    assert r.in_dsp and min(abs(r.t - t) for t in plan.landing_times()) <= 2 * DT + 1e-9
+
+
+def test_a_robot_restarted_alone_rejoins_in_phase(running):
+    sim = running(params=short_params(6), methods=["fixed", "mpc"], speed=4.0)
+    _started(sim)
+    sim.wait_applied(sim.pause())
+    robot = sim.robots["fixed"]
+    robot.session.fell = True  # as the world's fall check would mark it
+    robot.session.fall_reason = "test: marked as fallen"
+    f = sim.wait_applied(sim.resume())
+    while f is not None and (f.robots[0].fell or f.robots[0].waiting or f.robots[0].t < 0.1):
+        f = sim.wait_frame(f.seq, timeout=30)
+    assert f is not None
+    fixed, mpc = f.robots
+    # in phase: both at the same point of the two-step cycle (the plans' step timing agrees)
+    cycle = 2 * mpc.params.walk.step_time
+    offset = ((mpc.t - fixed.t) % cycle)
+    assert min(offset, cycle - offset) < 0.011, (mpc.t, fixed.t)

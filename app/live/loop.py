@@ -250,8 +250,10 @@ class LiveLoop:
         for _ in range(int(STEP_UNTIL_MAX_S / intent.params.control_dt)):
             self._tick_all(intent)
             out = ref.session.last
-            if out is None or ref.fell:
+            if ref.fell:
                 return
+            if out is None:  # before the session's start the robots stand still
+                continue
             if intent.step_until == "liftoff" and out.in_ssp and not was_ssp:
                 return
             if intent.step_until == "landing" and was_ssp and (
@@ -306,7 +308,8 @@ class LiveLoop:
 
         A fresh plan stands ``t_start`` and then steps with the left foot; it joins when the
         reference robot is ``t_start`` before the start of one of its own left steps (same
-        timing from then on), or alone, or after two step cycles of waiting at most.
+        timing from then on; past the end of its walk the rhythm is extended), or alone, or
+        after two step cycles of waiting at most.
         """
         other = self._reference()
         plan = robot.session.plan
@@ -322,9 +325,15 @@ class LiveLoop:
         if not start:
             dt = robot.session.params.control_dt
             n = ref_plan.n_walking_steps
-            lead = ref_plan.step_start[:n] - plan.t_start - ref_t
-            left = ref_plan.swing_side[:n] == plan.swing_side[0]
-            start = bool(np.any(left & (lead > -dt / 2) & (lead <= dt / 2)))
+            left = ref_plan.step_start[:n][ref_plan.swing_side[:n] == plan.swing_side[0]]
+            if len(left):
+                # Past the end of the reference's walk its left steps go on in the same rhythm
+                # (robots that finished a walk restart together, one cycle later).
+                period = 2 * ref_plan.walk.step_time
+                k = max(0, math.ceil((ref_t + plan.t_start - left[-1]) / period))
+                left = np.append(left, left[-1] + period * np.arange(1, k + 2))
+                lead = left - plan.t_start - ref_t
+                start = bool(np.any((lead > -dt / 2) & (lead <= dt / 2)))
         if start:
             robot.waiting_since = None
 
@@ -332,17 +341,14 @@ class LiveLoop:
     def _record_rows(self) -> None:
         for method, robot in self.robots.items():
             s, out, m = robot.session, robot.session.last, robot.session.measured
-            walking = out is not None and 0 <= out.step_index < s.plan.n
+            if out is None or m is None:  # not started yet (or standing by): a gap
+                continue
+            walking = 0 <= out.step_index < s.plan.n
             row = np.array([
-                self.clock, s.t,
-                math.degrees(m.waist_angle) if m is not None else math.nan,
-                math.degrees(out.waist_rate) if out is not None else math.nan,
-                m.yaw_momentum if m is not None else math.nan,
-                out.kappa_legs if out is not None else math.nan,
-                robot.two_step_energy(),
+                self.clock, s.t, math.degrees(m.waist_angle), math.degrees(out.waist_rate),
+                m.yaw_momentum, out.kappa_legs, robot.two_step_energy(),
                 (0.0 if out.in_ssp else 1.0) if walking else math.nan,
-                out.step_index if out is not None else -1,
-                float(robot.fell),
+                out.step_index, float(robot.fell),
             ])
             self._rows.setdefault(method, []).append(row)
 

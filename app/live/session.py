@@ -47,7 +47,8 @@ def initial_intent(params: ControllerParams | None = None,
                    methods: Sequence[str] = DEFAULT_METHODS, speed: float = 1.0) -> Intent:
     """A session's first intent (validated); its time base starts when the session opens."""
     params = (params or live_params()).validated()
-    return Intent(params=params, methods=check_methods(methods), speed=check_speed(speed))
+    return Intent(params=params, methods=check_methods(methods), speed=check_speed(speed),
+                  anchor=(time.monotonic(), 0.0))
 
 
 CATCH_UP_S = 0.3  # [s] a loop this far behind its time base: the base moves (no rush after;

@@ -95,6 +95,8 @@ class Session:
         self.measured: Measurement | None = None
         self._com_vel_prev: np.ndarray | None = None
         self.wall_time = 0.0
+        # [s] summed over the ticks: where the time of a control period goes (bench)
+        self.time_split = {"controller": 0.0, "simulation": 0.0, "measurement": 0.0}
 
     @property
     def params(self) -> ControllerParams:
@@ -118,18 +120,23 @@ class Session:
 
     def tick(self) -> TickOutput:
         """Controller tick from the measured state, then one control period of simulation."""
-        w, world = self.walker, self.world
-        wall0 = time.perf_counter()
+        w, world, clock, split = self.walker, self.world, time.perf_counter, self.time_split
+        wall0 = clock()
         q_meas = world.q_joints()
-        t0 = time.perf_counter()
+        t0 = clock()
         out = w.tick(q_meas)
-        tick_ms = (time.perf_counter() - t0) * 1e3
+        t1 = clock()
         world.step(out.q_target)
+        t2 = clock()
         m = self._measure(float(q_meas[0]))
-        self._record(out, m, tick_ms)
+        self._record(out, m, (t1 - t0) * 1e3)
         self._bookkeep(out, m)
         self.last, self.measured = out, m
-        self.wall_time += time.perf_counter() - wall0
+        t3 = clock()
+        split["controller"] += t1 - t0
+        split["simulation"] += t2 - t1
+        split["measurement"] += t3 - t2
+        self.wall_time += t3 - wall0
         return out
 
     # -- measurement -------------------------------------------------------------------------

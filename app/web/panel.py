@@ -96,8 +96,7 @@ class ControlPanel:
             row = gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
             row.on_click(lambda e: self._step(e.target.value))
             self.timeline = gui.add_slider("Timeline [s] (paused)", 0.0, 1.0, 0.005, 1.0,
-                                           disabled=True,
-                                           hint="while paused: show any kept instant")
+                                           disabled=True)
             self.timeline.on_update(lambda _e: self._seek())
             self.speed = gui.add_slider("Speed [x real time]", SPEED_MIN, SPEED_MAX, 0.1,
                                         intent.speed)
@@ -312,7 +311,13 @@ class ControlPanel:
                 handle.value = shown
 
     def _update_timeline(self, frame: LiveFrame) -> None:
-        if not frame.paused:
+        if not self.session.intent.paused:  # the slider rests at the present while running
+            if self.timeline.value != self.timeline.max:
+                self._local.reflecting = True
+                try:
+                    self.timeline.value = self.timeline.max
+                finally:
+                    self._local.reflecting = False
             return
         span = self.session.frames.span()
         if span is None:

@@ -37,6 +37,13 @@ def css(rgb: tuple[int, int, int], alpha: float = 1.0) -> str:
     return f"rgba({rgb[0]}, {rgb[1]}, {rgb[2]}, {alpha})"
 
 
+def _on(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
+    """``fp`` sampled at ``xp``, read at ``x`` (NaN outside ``xp``)."""
+    if len(xp) < 2:
+        return np.full(len(x), np.nan)
+    return np.interp(x, xp, fp, left=np.nan, right=np.nan)
+
+
 def _span(values: list[np.ndarray], minimum: tuple[float, float]) -> tuple[float, float]:
     """A y range holding the data and at least ``minimum``, with some head room."""
     finite = np.concatenate([v[np.isfinite(v)] for v in values]) if values else np.zeros(0)
@@ -57,8 +64,9 @@ class LivePlots:
                                        initial_value=f"{WINDOWS_S[0]:g}")
         self.window.on_update(lambda _e: self._invalidate())
         self.note = gui.add_markdown(
-            "Grey bands: double support (both feet down). While paused and sought, the plots "
-            "end at the instant shown.")
+            "Grey bands: double support, both feet down (a band starts at a landing and ends "
+            "at the next lift-off). x: seconds before the instant shown (while paused and "
+            "sought, the plots end there).")
         self.folder = gui.add_folder("Plots", expand_by_default=True)
         self.handles: dict[str, Any] = {}
         self._scales: dict[str, tuple] = {}
@@ -87,16 +95,16 @@ class LivePlots:
         if len(clock) < 2:
             return
         step = max(1, int(math.ceil(len(clock) / MAX_POINTS)))
-        x = (clock - frame.clock)[::step]
+        clock = clock[::step]
+        x = clock - frame.clock
         dsp = window.column(ref, "in_dsp")[::step] == 1.0
         for col, handle in self.handles.items():
-            ys = []
-            for m in methods:
-                y = window.column(m, col)[::step]
-                ys.append(y if len(y) == len(x) else np.full(len(x), np.nan))
+            # each robot's rows on the first robot's clock (robots of a session split across
+            # worker processes arrive in different batches)
+            ys = [_on(clock, window.column(m, "clock"), window.column(m, col)) for m in methods]
             spec = next(p for p in PLOTS if p[0] == col)
             lo, hi = _span(ys, spec[2])
-            band = np.where(dsp, hi, np.nan)
+            band = np.where(dsp, hi, lo)  # filled down from the line: shaded in the DSP only
             handle.data = (x.astype(np.float32), *(y.astype(np.float32) for y in ys),
                            band.astype(np.float32))
             scales = (seconds, round(lo, 2), round(hi, 2))
@@ -140,7 +148,7 @@ class HorizonInspector:
         x_axis = viser.uplot.Series(label="t from now [s]")
         empty = tuple(np.zeros(2, dtype=np.float32) for _ in range(5))
         self.com = gui.add_uplot(
-            data=empty, title="Predicted CoM and planned feet, x [m] (eq. 25-26, 20-21)",
+            data=empty, title="Predicted CoM and planned feet, x from the CoM now [m] (eq. 25-26, 20-21)",
             series=(x_axis, viser.uplot.Series(label="CoM x", stroke="rgb(140,60,200)", width=2),
                     viser.uplot.Series(label="left foot x", stroke=black, width=1.5),
                     viser.uplot.Series(label="right foot x", stroke=grey, width=1.5,
@@ -166,9 +174,20 @@ class HorizonInspector:
             aspect=2.0)
         self._key: tuple | None = None
         self._time = -math.inf
+        self._scales: dict[str, tuple[float, float, float]] = {}
 
     def _invalidate(self) -> None:
         self._key = None
+
+    def _scale(self, handle: Any, name: str, horizon: float, ys: list[np.ndarray],
+               minimum: tuple[float, float]) -> None:
+        """Explicit x (seconds, not uPlot's default time axis) and y ranges, sent on change."""
+        lo, hi = _span(ys, minimum)
+        scales = (round(horizon, 3), round(lo, 2), round(hi, 2))
+        if self._scales.get(name) != scales:
+            self._scales[name] = scales
+            handle.scales = {"x": viser.uplot.Scale(time=False, range=(0.0, scales[0])),
+                             "y": viser.uplot.Scale(range=(scales[1], scales[2]))}
 
     def update(self, frame: LiveFrame, now: float) -> None:
         methods = tuple(r.method for r in frame.robots)
@@ -187,12 +206,21 @@ class HorizonInspector:
         h = r.horizon
         t = h.t.astype(np.float32)
         f32 = np.float32
-        self.com.data = (t, h.com[:, 0].astype(f32), h.left_foot[:, 0].astype(f32),
-                         h.right_foot[:, 0].astype(f32), h.com[:, 1].astype(f32))
+        x0 = float(r.com[0])  # forward positions from the measured CoM now: readable numbers
+        com_x, left_x, right_x = h.com[:, 0] - x0, h.left_foot[:, 0] - x0, h.right_foot[:, 0] - x0
+        self.com.data = (t, com_x.astype(f32), left_x.astype(f32), right_x.astype(f32),
+                         h.com[:, 1].astype(f32))
         self.zmp.data = (t, h.zmp[:, 1].astype(f32), h.zmp_ref[:, 1].astype(f32),
                          h.zmp_lo[:, 1].astype(f32), h.zmp_hi[:, 1].astype(f32))
         deg = 180.0 / np.pi
-        self.theta.data = (t, (h.theta_ref * deg).astype(f32), (h.theta * deg).astype(f32))
+        theta_ref, theta = h.theta_ref * deg, h.theta * deg
+        self.theta.data = (t, theta_ref.astype(f32), theta.astype(f32))
+        horizon = float(h.t[-1])
+        self._scale(self.com, "com", horizon, [com_x, left_x, right_x, h.com[:, 1]],
+                    (-0.2, 0.6))
+        self._scale(self.zmp, "zmp", horizon, [h.zmp[:, 1], h.zmp_lo[:, 1], h.zmp_hi[:, 1]],
+                    (-0.15, 0.15))
+        self._scale(self.theta, "theta", horizon, [theta_ref, theta], (-10.0, 10.0))
         phase = "double support" if r.in_dsp else ("single support" if r.step_index >= 0
                                                      else "standing")
         self.caption.content = (

@@ -70,18 +70,46 @@ HIP_BAR = 0.18  # [m] half length of the hip lines drawn on the floor (the pelvi
 HIP_EVERY = 4  # hip lines at every 4th horizon sample (0.4 s apart at T_p = 0.1 s)
 FLOOR_Z = 0.006  # [m] overlays on the floor, just above it
 FOOTHOLD_WINDOW = 1.2  # [m] footholds drawn ahead of and behind the robot
-CAMERA_VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float],
-                              tuple[float, float, float]]] = {
-    # name -> (position, look_at, up), in the shifted world (the robots near x = 0)
-    "follow": ((3.6, -2.4, 1.8), (0.2, 0.0, 0.6), (0.0, 0.0, 1.0)),  # front-right, 3/4
-    "side": ((0.4, -5.5, 0.85), (0.4, 0.0, 0.65), (0.0, 0.0, 1.0)),  # x-z, as Fig. 11
-    "top": ((0.5, 0.0, 4.5), (0.5, 0.0, 0.0), (0.0, 1.0, 0.0)),  # x-y, as Fig. 5-6
-    "front": ((4.0, 0.0, 1.1), (0.0, 0.0, 0.7), (0.0, 0.0, 1.0)),
+CAMERA_VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float], float]] = {
+    # name -> (direction from the robots to the camera, up, vertical field of view [deg]);
+    # the distance is fitted to the robots shown and the browser's aspect (camera_pose).
+    # A narrow field from afar comes close to an orthographic view (side and top, as the
+    # paper's Fig. 11 and Fig. 5-6).
+    "follow": ((0.74, -0.55, 0.38), (0.0, 0.0, 1.0), 50.0),  # front-right, three quarters
+    "side": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0), 22.0),  # x-z plane
+    "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), 22.0),  # x-y plane
+    "front": ((1.0, 0.0, 0.15), (0.0, 0.0, 1.0), 35.0),
 }
+VIEW_MARGIN = 0.9  # [m] around the outer robots (labels, footholds ahead and behind)
+
+
+def camera_pose(name: str, n: int, aspect: float, along_x: bool
+                ) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float], float]:
+    """(position, look_at, up, vertical fov [rad]) of a named view that shows ``n`` robots
+    side by side (along x when ``along_x``) whole in a canvas of ``aspect`` = width/height."""
+    direction, up, fov_deg = CAMERA_VIEWS[name]
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    spread = (max(n, 1) - 1) / 2 * ROBOT_SPACING + VIEW_MARGIN
+    top = 2.3 + 0.3 * max(n - 1, 0)  # the highest label
+    lo = np.array([-spread if along_x else -VIEW_MARGIN, -VIEW_MARGIN if along_x else -spread, 0])
+    hi = np.array([spread if along_x else 1.2, VIEW_MARGIN if along_x else spread, top])
+    centre = (lo + hi) / 2
+    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
+                        for z in (lo[2], hi[2])]) - centre
+    u = np.asarray(up, float) - np.dot(up, d) * d
+    u /= np.linalg.norm(u)
+    right = np.cross(u, d)  # the camera looks along -d
+    half_w, half_h = np.abs(corners @ right).max(), np.abs(corners @ u).max()
+    depth = np.abs(corners @ d).max()
+    fov = math.radians(fov_deg)
+    tan_v = math.tan(fov / 2)
+    dist = depth + max(half_h / tan_v, half_w / (tan_v * max(aspect, 0.2)))
+    return centre + d * dist, centre, up, fov
 
 
 def slot_offset(slot: int, n: int) -> float:
-    """[m] y offset of robot ``slot`` among ``n``, centred on y = 0."""
+    """[m] offset of robot ``slot`` among ``n``, centred on 0 (along y; along x, seen from
+    the side, so that no robot hides another)."""
     return ((n - 1) / 2.0 - slot) * ROBOT_SPACING
 
 
@@ -202,12 +230,13 @@ class RobotMeshes:
             )
         self._methods = methods
 
-    def draw(self, robots: tuple[RobotFrame, ...], y: np.ndarray) -> None:
+    def draw(self, robots: tuple[RobotFrame, ...], offsets: np.ndarray) -> None:
+        """Pose every instance: each robot's bodies, moved by its (x, y) offset (n, 2)."""
         for kind, (_mesh, body, pos, R, _s, _c, _t) in self.kinds.items():
             xpos = np.stack([r.body_xpos[body] for r in robots]).astype(float)  # (n, k, 3)
             xmat = np.stack([r.body_xmat[body] for r in robots]).astype(float)  # (n, k, 3, 3)
             world = xpos + np.einsum("nkij,kj->nki", xmat, pos)
-            world[:, :, 1] += y[:, None]
+            world[:, :, :2] += offsets[:, None, :]
             rot = np.einsum("nkij,kjl->nkil", xmat, R).reshape(-1, 3, 3)
             h = self.handles[kind]
             h.batched_positions = world.reshape(-1, 3).astype(np.float32)
@@ -256,16 +285,16 @@ def _colored(parts: list[tuple[np.ndarray, tuple[int, int, int]]]) -> tuple[np.n
     return seg, col
 
 
-def _robot_prediction(r: RobotFrame, y: float) -> list[np.ndarray]:
+def _robot_prediction(r: RobotFrame, y: np.ndarray) -> list[np.ndarray]:
     """Predicted CoM path and hip lines over the horizon, on the floor (Fig. 5-6)."""
     hz = r.horizon
     if hz is None:
         return []
-    com = np.vstack([r.com[None, :2], hz.com]) + (0.0, y)
+    com = np.vstack([r.com[None, :2], hz.com]) + y
     path = polyline_segments(np.column_stack([com, np.full(len(com), FLOOR_Z + 0.004)]))
 
     def bars(p: np.ndarray, theta: np.ndarray, half: float = HIP_BAR) -> np.ndarray:
-        hp = hip_points(p + (0.0, y), theta, half)  # (N, 2, 2)
+        hp = hip_points(p + y, theta, half)  # (N, 2, 2)
         return np.concatenate([hp, np.full((len(theta), 2, 1), FLOOR_Z + 0.006)], axis=2)
 
     out = [path]
@@ -333,10 +362,12 @@ class SceneView:
         self._methods: tuple[str, ...] = ()
         self._overlay_time = self._label_time = -math.inf
         self._keys: dict[str, Any] = {}
-        pos, look, _up = CAMERA_VIEWS["follow"]
+        self.along_x = False  # robots side by side along y (along x: seen from the side)
         if isinstance(target, viser.ViserServer):
-            target.initial_camera.position = pos
-            target.initial_camera.look_at = look
+            pos, look, _up, fov = camera_pose("follow", 3, 1.3, False)
+            target.initial_camera.position = tuple(pos)
+            target.initial_camera.look_at = tuple(look)
+            target.initial_camera.fov = fov
         else:
             self.set_camera("follow", target)
         self._apply_layers()
@@ -355,11 +386,20 @@ class SceneView:
         """Move one browser's camera to a named view (the world follows the robots)."""
         if client is None or name not in CAMERA_VIEWS:
             return
-        pos, look, up = CAMERA_VIEWS[name]
+        # Seen from the side the robots stand one behind the other: spread them along x
+        # then (for everyone looking at this scene), along y otherwise.
+        self.along_x = name == "side"
+        try:
+            aspect = client.camera.aspect
+        except AssertionError:  # the browser has not reported its canvas yet
+            aspect = 1.3
+        pos, look, up, fov = camera_pose(name, len(self._methods) or 3, aspect, self.along_x)
+        self._keys.clear()
         with client.atomic():
             client.camera.up_direction = up
-            client.camera.position = pos
-            client.camera.look_at = look
+            client.camera.fov = fov
+            client.camera.position = tuple(pos)
+            client.camera.look_at = tuple(look)
 
     def _apply_layers(self) -> None:
         self.robots.set_visible(self.layers["robots"])
@@ -392,7 +432,8 @@ class SceneView:
             return
         robots = frame.robots
         n = len(robots)
-        y = np.array([slot_offset(i, n) for i in range(n)])
+        y = np.array([(slot_offset(i, n), 0.0) if self.along_x else (0.0, slot_offset(i, n))
+                      for i in range(n)])  # (n, 2) each robot's offset in x, y
         target = float(np.mean([r.com[0] for r in robots])) if self.follow else 0.0
         jump = abs(target - self._follow_x) > 2.0 or frame.paused
         self._follow_x = target if jump else self._follow_x + 0.25 * (target - self._follow_x)
@@ -412,7 +453,7 @@ class SceneView:
                     # staggered heights: labels never overlap, whatever the camera
                     z = 2.05 + 0.3 * (len(robots) - 1 - r.slot)
                     label.set(text=_label_text(r),
-                              position=np.array([r.com[0], yi, z], np.float32))
+                              position=np.array([r.com[0] + yi[0], yi[1], z], np.float32))
 
     def _draw_overlays(self, robots: tuple[RobotFrame, ...], y: np.ndarray,
                        kept: FrameStore | None) -> None:
@@ -425,12 +466,12 @@ class SceneView:
                 for r, yi in zip(robots, y, strict=True):
                     holds = r.plan.footholds()
                     near = np.abs(holds[:, 0] - r.com[0]) < FOOTHOLD_WINDOW
-                    parts.append(rectangle_segments(holds[near, :2] + (0.0, yi), FOOT_SIZE,
+                    parts.append(rectangle_segments(holds[near, :2] + yi, FOOT_SIZE,
                                                     FLOOR_Z))
                 ov["footholds"].set(points=_seg(parts))
         if on["support"]:
             ov["support"].set(points=_seg([
-                polyline_segments(np.column_stack([r.support + (0.0, yi),
+                polyline_segments(np.column_stack([r.support + yi,
                                                    np.full(len(r.support), FLOOR_Z)]),
                                   closed=True) for r, yi in zip(robots, y, strict=True)
                 if len(r.support) >= 3]))
@@ -441,10 +482,10 @@ class SceneView:
             pts, cols = [], []
             for r, yi in zip(robots, y, strict=True):
                 if r.zmp_ref is not None:
-                    pts.append((r.zmp_ref[0], r.zmp_ref[1] + yi, FLOOR_Z + 0.01))
+                    pts.append((*(r.zmp_ref + yi), FLOOR_Z + 0.01))
                     cols.append(ZMP_REF)
                 if r.cop is not None:
-                    pts.append((r.cop[0], r.cop[1] + yi, FLOOR_Z + 0.02))
+                    pts.append((*(r.cop + yi), FLOOR_Z + 0.02))
                     cols.append(ZMP_MEAS)
             if pts:
                 ov["zmp"].set(points=np.array(pts, np.float32),
@@ -456,11 +497,11 @@ class SceneView:
             arrows = []
             for r, yi in zip(robots, y, strict=True):
                 length = float(np.clip(MOMENTUM_SCALE * r.yaw_momentum, -1.0, 1.0))
-                base = np.array([r.com[0], yi, 1.75])
+                base = np.array([r.com[0] + yi[0], yi[1], 1.75])
                 arrows.append([base, base + (0.0, 0.0, length if abs(length) > 0.01 else 0.01)])
             ov["momentum"].set(points=np.array(arrows, np.float32))
         if on["reach"]:
-            legs = np.concatenate([np.stack([r.hips, r.ankles], axis=1) + (0.0, yi, 0.0)
+            legs = np.concatenate([np.stack([r.hips, r.ankles], axis=1) + (*yi, 0.0)
                                    for r, yi in zip(robots, y, strict=True)])
             colors = np.array([reach_color(v) for r in robots for v in r.reach], np.uint8)
             ov["reach"].set(points=legs.astype(np.float32),
@@ -473,13 +514,13 @@ class SceneView:
                 for r, yi in zip(robots, y, strict=True):
                     seg = stick_segments(kept, r)
                     if seg is not None:
-                        seg = seg + (0.0, yi, 0.0)
+                        seg = seg + (*yi, 0.0)
                         parts += [(seg[:3], STICK_START), (seg[3:], STICK_END)]
                 pts, cols = _colored(parts)
                 ov["sticks"].set(points=pts, colors=cols)
 
 
-def _swing_path(r: RobotFrame, y: float, samples: int = 20) -> np.ndarray:
+def _swing_path(r: RobotFrame, y: np.ndarray, samples: int = 20) -> np.ndarray:
     """Path of the swing foot over the step in progress (eq. 20-21)."""
     plan, k = r.plan, r.step_index
     if not (0 <= k < plan.n):
@@ -487,7 +528,7 @@ def _swing_path(r: RobotFrame, y: float, samples: int = 20) -> np.ndarray:
     t = np.linspace(plan.step_start[k] + plan.step_dsp[k], plan.landing_times()[k], samples)
     feet = plan.sample(t)
     path = feet.p_left if int(plan.swing_side[k]) == LEFT else feet.p_right
-    return polyline_segments(path + (0.0, y, 0.0))
+    return polyline_segments(path + (*y, 0.0))
 
 
 def _label_text(r: RobotFrame) -> str:
