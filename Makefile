@@ -17,8 +17,9 @@ $(STAMP): $(BIN)/python pyproject.toml
 	$(BIN)/pip install -q -e .
 	@touch $@
 
+# The cluster extra (Ray) too: the sweep's Ray test runs a local 2-CPU instance.
 $(TEST_STAMP): $(STAMP)
-	$(BIN)/pip install -q -e '.[test]'
+	$(BIN)/pip install -q -e '.[test,cluster]'
 	@touch $@
 
 run: $(STAMP)
@@ -36,8 +37,11 @@ chromium:
 test: $(TEST_STAMP) chromium
 	$(BIN)/python -m pytest -q
 
+# Style and types: ruff's rules and formatting everywhere, mypy on the pure controller.
 lint: $(TEST_STAMP)
 	$(BIN)/ruff check app controller models tests
+	$(BIN)/ruff format --check app controller models tests
+	$(BIN)/mypy
 
 clean:
 	rm -rf $(VENV) .pytest_cache

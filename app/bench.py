@@ -112,8 +112,7 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         },
         # mean per tick: the controller, MuJoCo (the substeps and their copies) and the
         # measurement (contacts, CoP, support polygon, series row, bookkeeping)
-        "time_split_ms": {k: (v - split0[k]) / ticks * 1e3
-                          for k, v in session.time_split.items()},
+        "time_split_ms": {k: (v - split0[k]) / ticks * 1e3 for k, v in session.time_split.items()},
         "sim_time": sim_time,
         "wall_time": wall,
         "cpu_time": cpu,
@@ -149,10 +148,12 @@ def live_loop(ticks: int) -> dict[str, Any]:
     for _ in range(ticks):
         loop.iterate()
     rtf = (loop.clock - clock0) / (time.perf_counter() - start)
-    return {"live_loop_realtime_factor": rtf,
-            # headroom kept for frames, plot rows and the scheduler of a busy machine
-            "robots_per_worker": max(1, int(np.floor(0.8 * rtf))),
-            "frame_bytes_per_s": sent[0] / (time.perf_counter() - start)}
+    return {
+        "live_loop_realtime_factor": rtf,
+        # headroom kept for frames, plot rows and the scheduler of a busy machine
+        "robots_per_worker": max(1, int(np.floor(0.8 * rtf))),
+        "frame_bytes_per_s": sent[0] / (time.perf_counter() - start),
+    }
 
 
 def tick_cpu_ms(ticks: int) -> np.ndarray:
@@ -370,7 +371,8 @@ def format_report(r: dict[str, Any]) -> str:
         + "   ".join(f"{k} {v:.3f}" for k, v in r["layer_ms"].items())
         + "  [ms]",
         "time per tick        "
-        + "   ".join(f"{k} {v:.3f}" for k, v in r["time_split_ms"].items()) + "  [ms]",
+        + "   ".join(f"{k} {v:.3f}" for k, v in r["time_split_ms"].items())
+        + "  [ms]",
         f"live loop            real-time factor {r['live_loop_realtime_factor']:.1f} (one "
         f"robot, frames included): a worker holds {r['robots_per_worker']} robots at 1.0x",
         f"real-time factor     closed loop {r['realtime_factor']:.1f}   MuJoCo alone "

@@ -66,25 +66,51 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         help="the report /report shows (default: the latest `experiments --out`)",
     )
-    p.add_argument("--methods", nargs="+", choices=METHODS, default=None,
-                   help="the robots every session starts with (default: fixed mpc)")
-    p.add_argument("--workers", type=int, default=None,
-                   help="worker processes running the robots (default: one per core; 0: in "
-                   "this process)")
-    p.add_argument("--sessions", choices=("shared", "private"), default=None,
-                   help="shared: every browser watches one session (default); private: each "
-                   "browser gets its own while the workers have room")
-    p.add_argument("--robots-per-worker", type=_positive_int, default=None,
-                   help="robots one worker runs at once (default 2; see pelvic-walk bench)")
-    p.add_argument("--display-hz", type=_finite, default=None,
-                   help="scene updates per second at most (default 20)")
-    p.add_argument("--idle-timeout", type=_finite, default=None,
-                   help="[s] an API-opened private session without calls ends (default 300)")
+    p.add_argument(
+        "--methods",
+        nargs="+",
+        choices=METHODS,
+        default=None,
+        help="the robots every session starts with (default: fixed mpc)",
+    )
+    p.add_argument(
+        "--workers",
+        type=int,
+        default=None,
+        help="worker processes running the robots (default: one per core; 0: in this process)",
+    )
+    p.add_argument(
+        "--sessions",
+        choices=("shared", "private"),
+        default=None,
+        help="shared: every browser watches one session (default); private: each "
+        "browser gets its own while the workers have room",
+    )
+    p.add_argument(
+        "--robots-per-worker",
+        type=_positive_int,
+        default=None,
+        help="robots one worker runs at once (default 2; see pelvic-walk bench)",
+    )
+    p.add_argument(
+        "--display-hz",
+        type=_finite,
+        default=None,
+        help="scene updates per second at most (default 20)",
+    )
+    p.add_argument(
+        "--idle-timeout",
+        type=_finite,
+        default=None,
+        help="[s] an API-opened private session without calls ends (default 300)",
+    )
 
     p = sub.add_parser(
-        "simulate", help="one headless closed-loop MuJoCo run",
+        "simulate",
+        help="one headless closed-loop MuJoCo run",
         description="One headless closed-loop run. Every parameter of controller/params.py "
-        "has an option (or use --set GROUP.NAME=VALUE).")
+        "has an option (or use --set GROUP.NAME=VALUE).",
+    )
     p.add_argument("--method", choices=METHODS, required=True)
     add_param_options(p, required={"walk.step_length"})
     p.add_argument("--seed", type=int, default=None)
@@ -107,8 +133,12 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--viewers", type=_positive_int, default=20)
     p.add_argument("--robots", type=int, choices=(1, 2, 3), default=3)
     p.add_argument("--seconds", type=_positive_int, default=120)
-    p.add_argument("--port", type=_port, default=None,
-                   help="a server already running on 127.0.0.1 (default: start one)")
+    p.add_argument(
+        "--port",
+        type=_port,
+        default=None,
+        help="a server already running on 127.0.0.1 (default: start one)",
+    )
     p.add_argument("--viser-port", type=_port, default=None)
     p.add_argument("--json", type=Path, default=None)
 
@@ -126,8 +156,12 @@ def _simulate(args: argparse.Namespace) -> int:
     except ValueError as exc:  # bad parameter values: one line, exit 2, nothing started
         print(f"pelvic-walk simulate: error: {exc}", file=sys.stderr)
         return 2
-    cfg = RunConfig(params=params, seed=args.seed,
-                    perturbation=0.01 if args.seed is not None else 0.0, backend=args.backend)
+    cfg = RunConfig(
+        params=params,
+        seed=args.seed,
+        perturbation=0.01 if args.seed is not None else 0.0,
+        backend=args.backend,
+    )
     session = run(cfg)
     summary = session.summary()
     ok = "success" if summary["success"] else ("FELL" if summary["fell"] else "incomplete")
@@ -193,9 +227,18 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "serve":
             from app.web.server import serve
 
-            return serve(args.host, args.port, args.viser_port, args.report_dir, args.workers,
-                         args.sessions, args.robots_per_worker, args.display_hz,
-                         args.idle_timeout, args.methods)
+            return serve(
+                args.host,
+                args.port,
+                args.viser_port,
+                args.report_dir,
+                args.workers,
+                args.sessions,
+                args.robots_per_worker,
+                args.display_hz,
+                args.idle_timeout,
+                args.methods,
+            )
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main
 
@@ -207,8 +250,9 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "loadtest":
             from app.loadtest import main as loadtest_main
 
-            return loadtest_main(args.viewers, args.robots, args.seconds, args.port,
-                                 args.viser_port, args.json)
+            return loadtest_main(
+                args.viewers, args.robots, args.seconds, args.port, args.viser_port, args.json
+            )
         if args.command == "bench":
             from app.bench import main as bench_main
 

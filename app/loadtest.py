@@ -63,8 +63,9 @@ def _children(pid: int) -> list[int]:
 async def _viewer(url: str, subprotocol: str, counter: list[int], stop: asyncio.Event) -> None:
     import websockets
 
-    async with websockets.connect(url, subprotocols=[subprotocol], max_size=None,
-                                  open_timeout=60) as ws:
+    async with websockets.connect(
+        url, subprotocols=[subprotocol], max_size=None, open_timeout=60
+    ) as ws:
         while not stop.is_set():
             try:
                 msg = await asyncio.wait_for(ws.recv(), timeout=0.5)
@@ -102,7 +103,8 @@ async def _run(base: str, viser_url: str, viewers: int, seconds: float) -> dict[
     stop.set()
     await asyncio.gather(*tasks, return_exceptions=True)
     return {
-        "viewers": viewers, "seconds": elapsed,
+        "viewers": viewers,
+        "seconds": elapsed,
         "realtime_factor_median": statistics.median(rtf) if rtf else None,
         "realtime_factor_min": min(rtf) if rtf else None,
         "realtime_factor_samples": rtf,
@@ -111,9 +113,14 @@ async def _run(base: str, viser_url: str, viewers: int, seconds: float) -> dict[
     }
 
 
-def run_loadtest(viewers: int, robots: int, seconds: float, port: int | None = None,
-                 viser_port: int | None = None, serve_args: list[str] | None = None
-                 ) -> dict[str, Any]:
+def run_loadtest(
+    viewers: int,
+    robots: int,
+    seconds: float,
+    port: int | None = None,
+    viser_port: int | None = None,
+    serve_args: list[str] | None = None,
+) -> dict[str, Any]:
     """Start (or use) a server, load it, and return the figures (see the module docstring)."""
     if robots not in METHOD_SETS:
         raise ValueError(f"robots must be 1, 2 or 3, got {robots}")
@@ -122,9 +129,18 @@ def run_loadtest(viewers: int, robots: int, seconds: float, port: int | None = N
         port, viser_port = free_port(), free_port()
         exe = Path(sys.executable).with_name("pelvic-walk")
         proc = subprocess.Popen(
-            [str(exe), "serve", "--port", str(port), "--viser-port", str(viser_port),
-             *(serve_args or [])],
-            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+            [
+                str(exe),
+                "serve",
+                "--port",
+                str(port),
+                "--viser-port",
+                str(viser_port),
+                *(serve_args or []),
+            ],
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.PIPE,
+            text=True,
         )
     elif viser_port is None:
         raise ValueError("--viser-port is needed with --port")
@@ -135,9 +151,12 @@ def run_loadtest(viewers: int, robots: int, seconds: float, port: int | None = N
         r.raise_for_status()
         mem0 = rss_mb(proc.pid) if proc else None
         out = asyncio.run(_run(base, f"ws://127.0.0.1:{viser_port}", viewers, seconds))
-        out.update(robots=robots, memory_mb_start=mem0,
-                   memory_mb_end=rss_mb(proc.pid) if proc else None,
-                   health=httpx.get(f"{base}/api/health", timeout=10).json())
+        out.update(
+            robots=robots,
+            memory_mb_start=mem0,
+            memory_mb_end=rss_mb(proc.pid) if proc else None,
+            health=httpx.get(f"{base}/api/health", timeout=10).json(),
+        )
         if mem0 and out["memory_mb_end"]:
             out["memory_growth_percent"] = 100 * (out["memory_mb_end"] / mem0 - 1)
         return out
@@ -171,19 +190,29 @@ def format_report(r: dict[str, Any]) -> str:
     lines = [
         f"loadtest: {r['viewers']} viewers, {r['robots']} robots, {r['seconds']:.0f} s",
         f"real-time factor   median {med:.3f}   min {lo:.3f}   "
-        f"({len(r['realtime_factor_samples'])} samples, 1 s apart)" if med is not None
+        f"({len(r['realtime_factor_samples'])} samples, 1 s apart)"
+        if med is not None
         else "real-time factor   no samples",
         f"sent per viewer    {r['bytes_per_viewer_per_s'] / 1e3:.1f} KB/s (max "
         f"{(r['bytes_per_viewer_per_s_max'] or 0) / 1e3:.1f} KB/s over 1 s)",
     ]
     if r.get("memory_mb_start"):
-        lines.append(f"server memory      {r['memory_mb_start']:.0f} -> "
-                     f"{r['memory_mb_end']:.0f} MB ({r['memory_growth_percent']:+.1f} %)")
+        lines.append(
+            f"server memory      {r['memory_mb_start']:.0f} -> "
+            f"{r['memory_mb_end']:.0f} MB ({r['memory_growth_percent']:+.1f} %)"
+        )
     return "\n".join(lines)
 
 
-def main(viewers: int, robots: int, seconds: float, port: int | None, viser_port: int | None,
-         json_path: Path | None, serve_args: list[str] | None = None) -> int:
+def main(
+    viewers: int,
+    robots: int,
+    seconds: float,
+    port: int | None,
+    viser_port: int | None,
+    json_path: Path | None,
+    serve_args: list[str] | None = None,
+) -> int:
     try:
         report = run_loadtest(viewers, robots, seconds, port, viser_port, serve_args)
     except (RuntimeError, ValueError, httpx.HTTPError) as exc:

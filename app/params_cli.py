@@ -69,8 +69,11 @@ def parse_assignment(text: str, many: bool = False) -> tuple[str, str, Any]:
     if not sep or not rhs.strip():
         raise ValueError(f"expected GROUP.NAME=VALUE, got {text!r}")
     group, name, meta = _meta_of(dotted.strip())
-    values = [convert(group, name, part, meta) for part in rhs.split(",")] if many else [
-        convert(group, name, rhs, meta)]
+    values = (
+        [convert(group, name, part, meta) for part in rhs.split(",")]
+        if many
+        else [convert(group, name, rhs, meta)]
+    )
     for v in values:
         check_value(group, name, v, meta)
     return group, name, (values if many else values[0])
@@ -97,29 +100,43 @@ def add_param_options(parser: argparse.ArgumentParser, required: Iterable[str] =
         opt = "--" + option_name(group, name, meta)
         unit = f" [{meta['unit']}]" if meta.get("unit") else ""
         if meta["type"] == "bool":
-            parser.add_argument(opt, dest=dest, action=argparse.BooleanOptionalAction,
-                                default=None, help=f"{meta['label']} (default {meta['default']})")
+            parser.add_argument(
+                opt,
+                dest=dest,
+                action=argparse.BooleanOptionalAction,
+                default=None,
+                help=f"{meta['label']} (default {meta['default']})",
+            )
             continue
-        rng = (f", {meta['min']:g}..{meta['max']:g}" if "min" in meta and "max" in meta
-               else "")
+        rng = f", {meta['min']:g}..{meta['max']:g}" if "min" in meta and "max" in meta else ""
         choices = f", one of {', '.join(meta['choices'])}" if meta.get("choices") else ""
         parser.add_argument(
-            opt, dest=dest, type=_number(group, name, meta), default=None,
-            required=f"{group}.{name}" in required, metavar="VALUE" if not choices else "MODE",
+            opt,
+            dest=dest,
+            type=_number(group, name, meta),
+            default=None,
+            required=f"{group}.{name}" in required,
+            metavar="VALUE" if not choices else "MODE",
             help=f"{meta['label']}{unit} (default {meta['default']}{rng}{choices})",
         )
-    parser.add_argument("--set", dest="param_set", action="append", default=[],
-                        metavar="GROUP.NAME=VALUE",
-                        help="any parameter of controller/params.py by its dotted name")
+    parser.add_argument(
+        "--set",
+        dest="param_set",
+        action="append",
+        default=[],
+        metavar="GROUP.NAME=VALUE",
+        help="any parameter of controller/params.py by its dotted name",
+    )
 
 
-def params_from_args(args: argparse.Namespace, base: ControllerParams | None = None,
-                     **top: Any) -> ControllerParams:
+def params_from_args(
+    args: argparse.Namespace, base: ControllerParams | None = None, **top: Any
+) -> ControllerParams:
     """The parameters the options ask for, on top of ``base`` (ValueError on a bad value)."""
     groups: dict[str, dict[str, Any]] = {}
     for key, value in vars(args).items():
         if key.startswith("param:") and value is not None:
-            group, name = key[len("param:"):].split(".")
+            group, name = key[len("param:") :].split(".")
             groups.setdefault(group, {})[name] = value
     for text in getattr(args, "param_set", []) or []:
         group, name, value = parse_assignment(text)

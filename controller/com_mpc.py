@@ -82,19 +82,23 @@ def prediction_matrices(T: float, N: int) -> tuple[np.ndarray, np.ndarray]:
     k = np.arange(1, N + 1, dtype=float)[:, None]  # (N, 1) sample index
     kT = k * T
     one, zero = np.ones_like(kT), np.zeros_like(kT)
-    PA = np.vstack([
-        np.hstack([one, kT, kT**2 / 2.0]),
-        np.hstack([zero, one, kT]),
-        np.hstack([zero, zero, one]),
-    ])
+    PA = np.vstack(
+        [
+            np.hstack([one, kT, kT**2 / 2.0]),
+            np.hstack([zero, one, kT]),
+            np.hstack([zero, zero, one]),
+        ]
+    )
     i = np.arange(N)[:, None] - np.arange(N)[None, :]  # k-1-j for rows k-1, columns j
     lower = i >= 0
     i = np.maximum(i, 0).astype(float)
-    PB = np.vstack([
-        np.where(lower, (1.0 + 3.0 * i + 3.0 * i**2) * T**3 / 6.0, 0.0),
-        np.where(lower, (1.0 + 2.0 * i) * T**2 / 2.0, 0.0),
-        np.where(lower, T, 0.0),
-    ])
+    PB = np.vstack(
+        [
+            np.where(lower, (1.0 + 3.0 * i + 3.0 * i**2) * T**3 / 6.0, 0.0),
+            np.where(lower, (1.0 + 2.0 * i) * T**2 / 2.0, 0.0),
+            np.where(lower, T, 0.0),
+        ]
+    )
     return PA, PB
 
 
@@ -238,8 +242,16 @@ class ComMpc:
         zmp = self.zmp_from_state @ x0 + self.zmp_from_jerk @ jerk
         next_state = self.A_ctrl @ x0 + self.B_ctrl[:, None] * jerk[0]  # A x0 + B u0
         return ComPlan(
-            times=times, com=com, zmp=zmp, zmp_ref=ref, jerk=jerk, next_state=next_state,
-            ok=bool(res.ok), zmp_lo=lo, zmp_hi=hi, status=res.status,
+            times=times,
+            com=com,
+            zmp=zmp,
+            zmp_ref=ref,
+            jerk=jerk,
+            next_state=next_state,
+            ok=bool(res.ok),
+            zmp_lo=lo,
+            zmp_hi=hi,
+            status=res.status,
         )
 
     def zmp_of(self, state: np.ndarray) -> np.ndarray:

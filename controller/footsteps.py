@@ -154,12 +154,20 @@ class FootstepPlan:
     def _table(self) -> np.ndarray:
         """(n, 17) per-step columns read by :meth:`sample` (see the ``_START`` .. constants)."""
         dsp = self.step_dsp
-        return np.column_stack([
-            self.step_start, dsp, np.maximum(dsp, 1e-9),
-            np.maximum(self.step_duration - dsp, 1e-9), self.step_height,
-            self.swing_side.astype(float), self.swing_from, self.swing_to, self.support_pos,
-            self.zmp_from[:, :2],
-        ])
+        return np.column_stack(
+            [
+                self.step_start,
+                dsp,
+                np.maximum(dsp, 1e-9),
+                np.maximum(self.step_duration - dsp, 1e-9),
+                self.step_height,
+                self.swing_side.astype(float),
+                self.swing_from,
+                self.swing_to,
+                self.support_pos,
+                self.zmp_from[:, :2],
+            ]
+        )
 
     def sample(self, times: float | np.ndarray, margin: float = 0.0) -> PlanSample:
         """The plan at ``times`` [s] (scalar or (N,)): phase, ZMP reference and box, feet.
@@ -217,10 +225,21 @@ class FootstepPlan:
         half = np.maximum(np.array(FOOT_SIZE) / 2.0 - margin, 0.0)
         side_i = side.astype(np.intp)
         return PlanSample(
-            t=t, step=idx, standing=standing, in_dsp=walking & ~in_ssp, in_ssp=in_ssp,
-            swing_side=np.where(walking, side_i, -1), support_side=1 - side_i, s_ssp=s,
-            zmp_ref=ref, zmp_lo=np.minimum(a, b) - half, zmp_hi=np.maximum(a, b) + half,
-            p_left=p_left, v_left=v_left, p_right=p_right, v_right=v_right,
+            t=t,
+            step=idx,
+            standing=standing,
+            in_dsp=walking & ~in_ssp,
+            in_ssp=in_ssp,
+            swing_side=np.where(walking, side_i, -1),
+            support_side=1 - side_i,
+            s_ssp=s,
+            zmp_ref=ref,
+            zmp_lo=np.minimum(a, b) - half,
+            zmp_hi=np.maximum(a, b) + half,
+            p_left=p_left,
+            v_left=v_left,
+            p_right=p_right,
+            v_right=v_right,
         )
 
     # -- replanning -----------------------------------------------------------------------
@@ -238,15 +257,23 @@ class FootstepPlan:
             )
         if started > self.n_walking_steps:  # the closing step has started
             return dataclasses.replace(
-                self, walk=walk, dsp_time=walk.dsp_ratio * walk.step_time,
+                self,
+                walk=walk,
+                dsp_time=walk.dsp_ratio * walk.step_time,
                 ssp_time=walk.step_time - walk.dsp_ratio * walk.step_time,
             )
         steps = _Steps()
         for j in range(started):
             steps.add(
-                float(self.step_start[j]), float(self.step_duration[j]), float(self.step_dsp[j]),
-                float(self.step_height[j]), int(self.swing_side[j]), self.swing_from[j],
-                self.swing_to[j], self.support_pos[j], self.zmp_from[j],
+                float(self.step_start[j]),
+                float(self.step_duration[j]),
+                float(self.step_dsp[j]),
+                float(self.step_height[j]),
+                int(self.swing_side[j]),
+                self.swing_from[j],
+                self.swing_to[j],
+                self.support_pos[j],
+                self.zmp_from[j],
             )
         feet = self.feet_init.copy()
         for j in range(started):
@@ -263,8 +290,17 @@ class _Steps:
 
     def add(self, start, duration, dsp, height, side, frm, to, support, zmp_from) -> None:
         self.rows.append(
-            (start, duration, dsp, height, side, np.array(frm, float), np.array(to, float),
-             np.array(support, float), np.array(zmp_from, float)[:2])
+            (
+                start,
+                duration,
+                dsp,
+                height,
+                side,
+                np.array(frm, float),
+                np.array(to, float),
+                np.array(support, float),
+                np.array(zmp_from, float)[:2],
+            )
         )
 
     def column(self, i: int, dtype: type = float) -> np.ndarray:
@@ -304,8 +340,9 @@ def _finish(
             to = np.array([support[0] + walk.step_length, y, 0.0])
         else:  # closing step: alongside the last foothold
             to = np.array([support[0], y, 0.0])
-        steps.add(t, walk.step_time, dsp, walk.foot_height, swing, feet[swing], to, support,
-                  zmp_prev)
+        steps.add(
+            t, walk.step_time, dsp, walk.foot_height, swing, feet[swing], to, support, zmp_prev
+        )
         feet[swing] = to
         zmp_prev = support[:2]
         t += walk.step_time

@@ -141,13 +141,13 @@ def log3(R: np.ndarray) -> np.ndarray:
     if math.pi - angle > 1e-4:
         f = angle / (2.0 * math.sin(angle))
         return np.array([f * w[0], f * w[1], f * w[2]])
-    w = np.array(w)
+    w_vec = np.array(w)
     # Near pi: axis from the diagonal of R = 2 a a' - I (+ small antisymmetric part).
     B = 0.5 * (R + np.eye(3))
     i = int(np.argmax(np.diag(B)))
     axis = B[:, i] / np.sqrt(max(B[i, i], 1e-12))
     axis /= np.linalg.norm(axis)
-    if axis @ w < 0.0:
+    if axis @ w_vec < 0.0:
         axis = -axis
     return angle * axis
 

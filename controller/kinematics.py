@@ -95,8 +95,7 @@ class RobotKinematics:
         self._q_identity_base[6] = 1.0
 
     # ------------------------------------------------------------------ configurations
-    def configuration(self, q_joints, p_world_base=_ORIGIN,
-                      quat_wxyz=_IDENTITY_WXYZ) -> np.ndarray:
+    def configuration(self, q_joints, p_world_base=_ORIGIN, quat_wxyz=_IDENTITY_WXYZ) -> np.ndarray:
         """Pinocchio q from joint angles (19,), base position and MuJoCo-order quaternion."""
         if p_world_base is _ORIGIN and quat_wxyz is _IDENTITY_WXYZ:  # base at the identity
             q = self._q_identity_base.copy()
@@ -128,10 +127,12 @@ class RobotKinematics:
         pin.computeJointJacobians(m, d)  # uses the kinematics just computed
         lws = pin.LOCAL_WORLD_ALIGNED
         fl, fr = self.sole_frame_ids
-        J_low = np.vstack((
-            pin.getFrameJacobian(m, d, fl, lws)[:, self.lower_v_idx],
-            pin.getFrameJacobian(m, d, fr, lws)[:, self.lower_v_idx],
-        ))
+        J_low = np.vstack(
+            (
+                pin.getFrameJacobian(m, d, fl, lws)[:, self.lower_v_idx],
+                pin.getFrameJacobian(m, d, fr, lws)[:, self.lower_v_idx],
+            )
+        )
         # Only the frames used here (not all frames of the model).
         upd = pin.updateFramePlacement
         return KinState(

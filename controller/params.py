@@ -78,19 +78,41 @@ def _w(default: float, lo: float, hi: float, label: str, log_min: float, **kw: A
 class WalkParams:
     """Footstep plan and swing-foot shape (layer 1, eq. 20-21)."""
 
-    step_length: float = _f(0.2, 0.01, 0.6, 0.01, "m", "Step length", lo_open=True,
-                            applies="step", cli="step-length")
-    step_time: float = _f(1.2, 0.6, 2.0, 0.05, "s", "Step time", applies="step",
-                          cli="step-time", paper=1.2)
-    dsp_ratio: float = _f(0.2, 0.05, 0.5, 0.01, "", "Double-support share", applies="step",
-                          cli="dsp-ratio")
-    foot_height: float = _f(0.06, 0.0, 0.15, 0.005, "m", "Foot lift height", applies="step",
-                            cli="foot-height")
-    step_width: float = _f(0.243, 0.18, 0.35, 0.001, "m", "Step width (feet lateral distance)",
-                           applies="step", cli="step-width", paper=0.243)
+    step_length: float = _f(
+        0.2, 0.01, 0.6, 0.01, "m", "Step length", lo_open=True, applies="step", cli="step-length"
+    )
+    step_time: float = _f(
+        1.2, 0.6, 2.0, 0.05, "s", "Step time", applies="step", cli="step-time", paper=1.2
+    )
+    dsp_ratio: float = _f(
+        0.2, 0.05, 0.5, 0.01, "", "Double-support share", applies="step", cli="dsp-ratio"
+    )
+    foot_height: float = _f(
+        0.06, 0.0, 0.15, 0.005, "m", "Foot lift height", applies="step", cli="foot-height"
+    )
+    step_width: float = _f(
+        0.243,
+        0.18,
+        0.35,
+        0.001,
+        "m",
+        "Step width (feet lateral distance)",
+        applies="step",
+        cli="step-width",
+        paper=0.243,
+    )
     n_steps: int = field(
-        default=10, metadata={"min": 1, "max": 200, "step": 1, "unit": "", "label": "Steps",
-                              "applies": "step", "cli": "steps", "gui": False}
+        default=10,
+        metadata={
+            "min": 1,
+            "max": 200,
+            "step": 1,
+            "unit": "",
+            "label": "Steps",
+            "applies": "step",
+            "cli": "steps",
+            "gui": False,
+        },
     )
 
 
@@ -98,9 +120,18 @@ class WalkParams:
 class ComMpcParams:
     """CoM MPC of eq. (10)-(18) and the pelvis tracking of eq. (19)."""
 
-    horizon: float = _f(1.6, 0.2, 3.0, 0.1, "s", "Horizon H", cli="horizon", paper=1.6,
-                        help="both MPCs look this far ahead; shorter than a step, they cannot "
-                        "see the next support foot")
+    horizon: float = _f(
+        1.6,
+        0.2,
+        3.0,
+        0.1,
+        "s",
+        "Horizon H",
+        cli="horizon",
+        paper=1.6,
+        help="both MPCs look this far ahead; shorter than a step, they cannot "
+        "see the next support foot",
+    )
     sample_time: float = _f(0.1, 0.02, 0.2, 0.01, "s", "MPC sample T_p")
     alpha: float = _w(1.0, 0.0, 100.0, "alpha (ZMP tracking)", 1e-3, paper=1.0)
     beta: float = _w(1e-3, 0.0, 10.0, "beta (CoM velocity fluctuation)", 1e-6)
@@ -113,8 +144,15 @@ class ComMpcParams:
 class PelvisMpcParams:
     """Reference pelvic angle (eq. 27-33) and pelvic-rotation MPC (eq. 34-38)."""
 
-    k_pel: float = _f(0.25, 0.0, 1.0, 0.01, "", "k_pel (eq. 31-32)",
-                      help="share of the step made by turning the pelvis")
+    k_pel: float = _f(
+        0.25,
+        0.0,
+        1.0,
+        0.01,
+        "",
+        "k_pel (eq. 31-32)",
+        help="share of the step made by turning the pelvis",
+    )
     alpha: float = _w(1.0, 0.0, 100.0, "alpha_pel (tracking)", 1e-3, paper=1.0)
     beta: float = _w(1e-6, 1e-10, 1.0, "beta_pel (yaw acceleration)", 1e-10, paper=1e-10)
     angle_limit_deg: float = _f(45.0, 0.0, 50.0, 1.0, "deg", "Pelvic angle limit")
@@ -170,8 +208,13 @@ class ControllerParams:
 
 
 GROUPS: tuple[str, ...] = ("walk", "com", "pelvis", "ik", "arms")
-GROUP_TITLES = {"walk": "Walk", "com": "CoM MPC", "pelvis": "Pelvic MPC", "ik": "QP IK",
-                "arms": "Arm swing"}
+GROUP_TITLES = {
+    "walk": "Walk",
+    "com": "CoM MPC",
+    "pelvis": "Pelvic MPC",
+    "ik": "QP IK",
+    "arms": "Arm swing",
+}
 
 
 def spec(cls_or_obj: Any) -> dict[str, dict[str, Any]]:

@@ -65,8 +65,12 @@ def lateral_distances(
         dy = np.array([p_left_now[1] - p_pelvis_now[1], p_right_now[1] - p_pelvis_now[1]])
     elif mode == "predicted":
         p_pelvis = np.atleast_2d(p_pelvis)
-        dy = np.column_stack([np.atleast_2d(p_left)[:, 1] - p_pelvis[:, 1],
-                              np.atleast_2d(p_right)[:, 1] - p_pelvis[:, 1]])
+        dy = np.column_stack(
+            [
+                np.atleast_2d(p_left)[:, 1] - p_pelvis[:, 1],
+                np.atleast_2d(p_right)[:, 1] - p_pelvis[:, 1],
+            ]
+        )
     else:
         raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
     # the left foot lies at +y of the pelvis, the right at -y: keep each at least the floor

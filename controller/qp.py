@@ -112,10 +112,18 @@ class QpSolver:
         self._A_pattern = _Pattern(np.ones(qp.A.shape, dtype=bool))
         s = osqp.OSQP()
         s.setup(
-            self._P_pattern.matrix(qp.P), qp.q, self._A_pattern.matrix(qp.A),
-            np.maximum(qp.l, -INF), np.minimum(qp.u, INF),
-            verbose=False, eps_abs=self.eps, eps_rel=self.eps, polishing=self.polish,
-            max_iter=self.max_iter, warm_starting=True, adaptive_rho=True,
+            self._P_pattern.matrix(qp.P),
+            qp.q,
+            self._A_pattern.matrix(qp.A),
+            np.maximum(qp.l, -INF),
+            np.minimum(qp.u, INF),
+            verbose=False,
+            eps_abs=self.eps,
+            eps_rel=self.eps,
+            polishing=self.polish,
+            max_iter=self.max_iter,
+            warm_starting=True,
+            adaptive_rho=True,
         )
         self._solver = s
         self._shape = qp.A.shape
@@ -126,6 +134,7 @@ class QpSolver:
             self._setup_osqp(qp)
             assert self._solver is not None
         else:
+            assert self._P_pattern is not None and self._A_pattern is not None
             kw: dict[str, np.ndarray] = {}
             if not _same(qp.P, self._P_obj):
                 kw["Px"] = self._P_pattern.values(qp.P)
@@ -133,9 +142,7 @@ class QpSolver:
             if not _same(qp.A, self._A_obj):
                 kw["Ax"] = self._A_pattern.values(qp.A)
                 self._A_obj = qp.A
-            self._solver.update(
-                q=qp.q, l=np.maximum(qp.l, -INF), u=np.minimum(qp.u, INF), **kw
-            )
+            self._solver.update(q=qp.q, l=np.maximum(qp.l, -INF), u=np.minimum(qp.u, INF), **kw)
         res = self._solver.solve(raise_error=False)
         status = str(res.info.status)
         if res.info.status_val not in (1, 2) or res.x is None or not math.isfinite(res.x.sum()):
@@ -153,7 +160,11 @@ class QpSolver:
         if model is None or self._shape != A.shape:
             model = daqp.Model()
             flag, _ = model.setup(
-                _buffer(P), np.ascontiguousarray(q, dtype=float), _buffer(A), bu, bl,
+                _buffer(P),
+                np.ascontiguousarray(q, dtype=float),
+                _buffer(A),
+                bu,
+                bl,
                 eq.astype(np.intc) * 5,
             )
             if flag < 0:
@@ -184,9 +195,11 @@ class QpSolver:
         try:
             # Finite data: a sum is finite iff every term is (barring overflow near 1e308).
             # P and A already checked (the same objects as last time) are not summed again.
-            finite = math.isfinite(qp.q.sum()) and (
-                _same(qp.P, self._P_obj) or math.isfinite(qp.P.sum())
-            ) and (_same(qp.A, self._A_obj) or math.isfinite(qp.A.sum()))
+            finite = (
+                math.isfinite(qp.q.sum())
+                and (_same(qp.P, self._P_obj) or math.isfinite(qp.P.sum()))
+                and (_same(qp.A, self._A_obj) or math.isfinite(qp.A.sum()))
+            )
             if not finite or (qp.l > qp.u + 1e-9).any():
                 x, status = None, "infeasible bounds or non-finite data"
             elif self.backend == "osqp":

@@ -154,8 +154,10 @@ class Walker:
             self.plan = self.plan.replanned(new.walk, self.t)
         if new.com != old.com:
             self.com_mpc.set_params(new.com)
-        if new.pelvis != old.pelvis or new.com.horizon != old.com.horizon or (
-            new.com.sample_time != old.com.sample_time
+        if (
+            new.pelvis != old.pelvis
+            or new.com.horizon != old.com.horizon
+            or (new.com.sample_time != old.com.sample_time)
         ):
             self.pelvis_mpc.set_params(new.pelvis, new.com.sample_time, horizon_samples(new.com))
         if new.method != old.method:
@@ -215,17 +217,22 @@ class Walker:
         t0 = lap("kinematics", t0)
         p_prev = self.p_world_pelvis_des.copy()
         self.p_world_pelvis_des[:2] += (
-            (p_world_com_des - self._last_com_des(p_world_com_des))
-            + p.com.pelvis_gain * (p_world_com_des - p_world_com_meas[:2])
-        )
+            p_world_com_des - self._last_com_des(p_world_com_des)
+        ) + p.com.pelvis_gain * (p_world_com_des - p_world_com_meas[:2])
         self.p_world_pelvis_des[2] = self.pelvis_height
         v_world_pelvis = (self.p_world_pelvis_des - p_prev) / dt
 
         # 6. Reference pelvic angle over the horizon (eq. 27-33).
         lateral = lateral_distances(
-            LATERAL_MODE, com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2],
-            p_world_com_meas[:2], plan.p_left[0, :2], plan.p_right[0, :2],
-            p.walk.step_width / 2, LATERAL_FLOOR,
+            LATERAL_MODE,
+            com_plan.com,
+            plan.p_left[h, :2],
+            plan.p_right[h, :2],
+            p_world_com_meas[:2],
+            plan.p_left[0, :2],
+            plan.p_right[0, :2],
+            p.walk.step_width / 2,
+            LATERAL_FLOOR,
         )
         theta_ref = reference_pelvic_angles(
             com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2], p.pelvis.k_pel, lateral
@@ -254,13 +261,25 @@ class Walker:
         v_ff_r = np.zeros(6)
         v_ff_r[:3] = plan.v_right[1] - v_world_pelvis
         v_des = foot_velocity_command(  # flat feet: desired poses given as positions
-            ks.T_pelvis_left_sole, p_des_l, v_ff_l,
-            ks.T_pelvis_right_sole, p_des_r, v_ff_r, p.ik.foot_gain,
+            ks.T_pelvis_left_sole,
+            p_des_l,
+            v_ff_l,
+            ks.T_pelvis_right_sole,
+            p_des_r,
+            v_ff_r,
+            p.ik.foot_gain,
         )
         q_low = self.q_cmd[lower]
         qp = build_ik(
-            ks.J_low, v_des, q_low, self._q_min_low, self._q_max_low,
-            p.ik, dt, p.method, waist_rate if p.method == "mpc" else None,
+            ks.J_low,
+            v_des,
+            q_low,
+            self._q_min_low,
+            self._q_max_low,
+            p.ik,
+            dt,
+            p.method,
+            waist_rate if p.method == "mpc" else None,
         )
         q_dot_low, ok = solve_ik(qp, self.ik_solver)
         if not ok:
@@ -274,8 +293,16 @@ class Walker:
         q_dot_up = np.zeros(len(arms))
         if p.arms.enabled:
             aqp = build_arm_qp(
-                ks.cmm_yaw_low, q_dot_low, ks.cmm_yaw_up, self.q_cmd[arms], self.q_init[arms],
-                self._q_min_arms, self._q_max_arms, p.ik.joint_speed_limit, p.arms, dt,
+                ks.cmm_yaw_low,
+                q_dot_low,
+                ks.cmm_yaw_up,
+                self.q_cmd[arms],
+                self.q_init[arms],
+                self._q_min_arms,
+                self._q_max_arms,
+                p.ik.joint_speed_limit,
+                p.arms,
+                dt,
             )
             q_dot_up, ok = solve_arm(aqp, self.arm_solver)
             if not ok:

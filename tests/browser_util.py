@@ -20,13 +20,20 @@ CHROMIUM = "/usr/bin/chromium"
 ROOT = Path(__file__).resolve().parents[1]
 ARTIFACTS = ROOT / "tests" / "artifacts"
 CHROME_ARGS = [
-    "--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-    "--disable-background-networking", "--disable-component-update", "--disable-sync",
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
 ]
 needs_chromium = [
     pytest.mark.browser,
-    pytest.mark.skipif(not os.path.exists(CHROMIUM),
-                       reason=f"{CHROMIUM} is missing (apt-get install chromium)"),
+    pytest.mark.skipif(
+        not os.path.exists(CHROMIUM), reason=f"{CHROMIUM} is missing (apt-get install chromium)"
+    ),
 ]
 
 
@@ -43,7 +50,10 @@ def serving(*args: str) -> Iterator[tuple[str, str, subprocess.Popen]]:
     exe = Path(sys.executable).with_name("pelvic-walk")
     proc = subprocess.Popen(
         [str(exe), "serve", "--port", str(port), "--viser-port", str(viser_port), *args],
-        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+        cwd=ROOT,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
     )
     base = f"http://127.0.0.1:{port}"
     try:
@@ -92,10 +102,13 @@ def click_slider(page, frame, label: str, value: float) -> None:
     thumb, track = slider(frame, label)
     track.scroll_into_view_if_needed()
     box = track.bounding_box()
-    lo, hi = float(thumb.get_attribute("aria-valuemin")), float(
-        thumb.get_attribute("aria-valuemax"))
-    page.mouse.click(box["x"] + (value - lo) / (hi - lo) * box["width"],
-                     box["y"] + box["height"] / 2)
+    lo, hi = (
+        float(thumb.get_attribute("aria-valuemin")),
+        float(thumb.get_attribute("aria-valuemax")),
+    )
+    page.mouse.click(
+        box["x"] + (value - lo) / (hi - lo) * box["width"], box["y"] + box["height"] / 2
+    )
 
 
 def close_notice(frame) -> None:

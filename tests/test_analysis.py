@@ -5,8 +5,15 @@ import math
 from controller.analysis import hip_points_for_angle, kinematic_analysis, reachable_step
 
 KEYS = {
-    "l_leg", "z0", "l_pel", "w_step", "theta_pel_deg", "step_max_fixed_static",
-    "step_max_rotation_static", "step_max_fixed_stretched", "step_max_rotation_stretched",
+    "l_leg",
+    "z0",
+    "l_pel",
+    "w_step",
+    "theta_pel_deg",
+    "step_max_fixed_static",
+    "step_max_rotation_static",
+    "step_max_fixed_stretched",
+    "step_max_rotation_stretched",
     "increase_percent",
 }
 
@@ -34,6 +41,11 @@ def test_helpers():
     assert abs(x[1] - x[0] - 0.21 * math.sin(math.pi / 4)) < 1e-12
     assert x[0] < 0 < x[1]
     assert abs(reachable_step(0.75, 0.68, 0.21, 0.0) - 0.3164) < 1e-3
-    assert abs(reachable_step(0.75, 0.68, 0.21, 45.0) - kinematic_analysis()[
-        "step_max_rotation_static"]) < 1e-12
+    assert (
+        abs(
+            reachable_step(0.75, 0.68, 0.21, 45.0)
+            - kinematic_analysis()["step_max_rotation_static"]
+        )
+        < 1e-12
+    )
     assert reachable_step(0.75, 0.68, 0.21, 30.0) < reachable_step(0.75, 0.68, 0.21, 45.0)

@@ -481,17 +481,35 @@ def test_horizon_has_one_value_per_sample_and_follows_the_horizon(client, live):
         open("/tmp/state.json", "w").write(json.dumps(client.get("/api/state").json(), indent=1))
     assert r.status_code == 200, r.text
     body = r.json()
-    keys = ("t", "com_x", "com_y", "zmp_x", "zmp_y", "zmp_ref_x", "zmp_ref_y", "zmp_min_x",
-            "zmp_max_x", "zmp_min_y", "zmp_max_y", "left_foot_x", "left_foot_y",
-            "right_foot_x", "right_foot_y", "theta_ref_deg", "theta_deg")
+    keys = (
+        "t",
+        "com_x",
+        "com_y",
+        "zmp_x",
+        "zmp_y",
+        "zmp_ref_x",
+        "zmp_ref_y",
+        "zmp_min_x",
+        "zmp_max_x",
+        "zmp_min_y",
+        "zmp_max_y",
+        "left_foot_x",
+        "left_foot_y",
+        "right_foot_x",
+        "right_foot_y",
+        "theta_ref_deg",
+        "theta_deg",
+    )
     params = live.intent.params.com
     n = round(params.horizon / params.sample_time)
     assert all(len(body[k]) == n for k in keys), {k: len(body[k]) for k in keys}
     t = body["t"]
     assert all(b > a for a, b in zip(t, t[1:], strict=False))
     assert t[-1] == pytest.approx(params.horizon, abs=1e-6)
-    assert all(lo <= z + 1e-6 and z <= hi + 1e-6 for lo, z, hi in zip(
-        body["zmp_min_y"], body["zmp_y"], body["zmp_max_y"], strict=True))
+    assert all(
+        lo <= z + 1e-6 and z <= hi + 1e-6
+        for lo, z, hi in zip(body["zmp_min_y"], body["zmp_y"], body["zmp_max_y"], strict=True)
+    )
     r = client.put("/api/params", json={"com": {"horizon": 1.2}})
     assert r.status_code == 200
     _wait_newer(live, 2)  # the next tick plans over the new horizon
@@ -526,10 +544,12 @@ def test_seek_shows_a_kept_instant_while_paused(client, live):
 def test_push_is_applied_or_refused_with_a_message(client, live):
     r = client.post("/api/sim/push", json={"method": "mpc", "force": [0, 40], "duration": 0.1})
     assert r.status_code == 200 and r.json()["applied"] is True
-    for body in ({"method": "redundancy", "force": [0, 40]},  # not shown
-                 {"method": "mpc", "force": [0, 1000]},  # above the maximum
-                 {"method": "mpc", "force": [0, 40], "duration": 5.0},
-                 {"method": "mpc", "force": [0, "x"]}):
+    for body in (
+        {"method": "redundancy", "force": [0, 40]},  # not shown
+        {"method": "mpc", "force": [0, 1000]},  # above the maximum
+        {"method": "mpc", "force": [0, 40], "duration": 5.0},
+        {"method": "mpc", "force": [0, "x"]},
+    ):
         r = client.post("/api/sim/push", json=body)
         assert r.status_code == 422, (body, r.text)
         assert r.json()["detail"]

@@ -59,22 +59,35 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             assert float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.2)
             click_slider(page, scene, "Step length [m]", 0.30)
             assert float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.3)
-            assert wait_for(lambda: httpx.get(f"{server}/api/params").json()["walk"][
-                "step_length"] == pytest.approx(0.3))
-            robots = wait_for(lambda: (rs := _robots(server)) and all(
-                r["step_length"] == pytest.approx(0.3) and r["step_index"] >= 0
-                for r in rs) and rs, timeout=60)
-            assert robots and all(r["params"]["step_length"] == pytest.approx(0.3)
-                                  for r in robots)
+            assert wait_for(
+                lambda: (
+                    httpx.get(f"{server}/api/params").json()["walk"]["step_length"]
+                    == pytest.approx(0.3)
+                )
+            )
+            robots = wait_for(
+                lambda: (
+                    (rs := _robots(server))
+                    and all(
+                        r["step_length"] == pytest.approx(0.3) and r["step_index"] >= 0 for r in rs
+                    )
+                    and rs
+                ),
+                timeout=60,
+            )
+            assert robots and all(r["params"]["step_length"] == pytest.approx(0.3) for r in robots)
             # An API change moves the slider (the GUI reflects PUT /api/params).
             r = httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.25}})
             assert r.status_code == 200
-            assert wait_for(lambda: float(thumb.get_attribute("aria-valuenow"))
-                            == pytest.approx(0.25))
+            assert wait_for(
+                lambda: float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.25)
+            )
 
             # Three robots at 0.3 m from the default camera, then the plots with phases.
-            httpx.put(f"{server}/api/params", json={
-                "methods": ["fixed", "redundancy", "mpc"], "walk": {"step_length": 0.3}})
+            httpx.put(
+                f"{server}/api/params",
+                json={"methods": ["fixed", "redundancy", "mpc"], "walk": {"step_length": 0.3}},
+            )
             time.sleep(12)
             page.screenshot(path=str(ARTIFACTS / "three_robots.png"))
             scene.get_by_role("tab", name="Plots").first.click()
@@ -85,25 +98,31 @@ def test_page_scene_gui_slider_timeline_and_views(server):
 
             # Pause, then move the timeline back: the scene, the API show the kept instant.
             scene.get_by_role("button", name="Pause").click()
-            state = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())["paused"]
-                             and s)
+            state = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())["paused"] and s)
             assert state and state["shown_t"] is None
             kept = state["kept"]
             assert kept["end"] - kept["start"] > 10.0
             timeline, _t = slider(scene, "Timeline [s] (paused)")
             assert wait_for(lambda: timeline.get_attribute("data-disabled") is None)
-            click_slider(page, scene, "Timeline [s] (paused)",
-                         kept["end"] - 10.0)  # ten seconds back
-            sought = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())[
-                "shown_t"] is not None and s)
+            click_slider(
+                page, scene, "Timeline [s] (paused)", kept["end"] - 10.0
+            )  # ten seconds back
+            sought = wait_for(
+                lambda: (s := httpx.get(f"{server}/api/state").json())["shown_t"] is not None and s
+            )
             assert sought, "the timeline did not seek"
             assert sought["shown_t"] == pytest.approx(kept["end"] - 10.0, abs=0.5)
             assert sought["clock"] == pytest.approx(sought["shown_t"])
             time.sleep(2)
             page.screenshot(path=str(ARTIFACTS / "scrubbed_10s_back.png"))
             scene.get_by_role("button", name="Resume").click()
-            back = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())[
-                "shown_t"] is None and not s["paused"] and s)
+            back = wait_for(
+                lambda: (
+                    (s := httpx.get(f"{server}/api/state").json())["shown_t"] is None
+                    and not s["paused"]
+                    and s
+                )
+            )
             assert back and back["clock"] >= kept["end"]
 
             # The camera views, and the horizon inspector at 0.4 m (Fig. 5-7).

@@ -29,21 +29,33 @@ VIEWPORT = {"width": 1300, "height": 720}  # small: three pages render in softwa
 
 
 def _private(base: str) -> list[dict]:
-    return [s for s in httpx.get(f"{base}/api/sessions", timeout=10).json()["sessions"]
-            if s["kind"] == "private"]
+    return [
+        s
+        for s in httpx.get(f"{base}/api/sessions", timeout=10).json()["sessions"]
+        if s["kind"] == "private"
+    ]
 
 
 def _step_length(base: str, sid: str) -> float:
-    return httpx.get(f"{base}/api/sessions/{sid}/params", timeout=10).json()["walk"][
-        "step_length"]
+    return httpx.get(f"{base}/api/sessions/{sid}/params", timeout=10).json()["walk"]["step_length"]
 
 
 def test_private_sessions_admission_close_and_a_worker_death():
     from playwright.sync_api import sync_playwright
 
-    with serving("--sessions", "private", "--workers", "1", "--robots-per-worker", "3",
-                 "--methods", "mpc") as (
-            base, viser_url, _proc), sync_playwright() as p:
+    with (
+        serving(
+            "--sessions",
+            "private",
+            "--workers",
+            "1",
+            "--robots-per-worker",
+            "3",
+            "--methods",
+            "mpc",
+        ) as (base, viser_url, _proc),
+        sync_playwright() as p,
+    ):
         browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
         try:
             pages = []
@@ -57,16 +69,26 @@ def test_private_sessions_admission_close_and_a_worker_death():
                 pages.append(page)
             sessions = wait_for(lambda: len(_private(base)) == 2 and _private(base))
             assert sessions, _private(base)
-            lengths = wait_for(lambda: sorted(_step_length(base, s["id"]) for s in sessions)
-                               == [0.25, 0.35] and True)
+            lengths = wait_for(
+                lambda: (
+                    sorted(_step_length(base, s["id"]) for s in sessions) == [0.25, 0.35] and True
+                )
+            )
             assert lengths, [_step_length(base, s["id"]) for s in sessions]
             # each one's robots take its own length from their next step; the shared demo not
             for s in sessions:
                 want = _step_length(base, s["id"])
-                state = wait_for(lambda sid=s["id"], w=want: (
-                    st := httpx.get(f"{base}/api/sessions/{sid}/state", timeout=10).json())
-                    and all(r["step_length"] == pytest.approx(w) and r["step_index"] >= 1
-                            for r in st["robots"]) and st, timeout=120)
+                state = wait_for(
+                    lambda sid=s["id"], w=want: (
+                        (st := httpx.get(f"{base}/api/sessions/{sid}/state", timeout=10).json())
+                        and all(
+                            r["step_length"] == pytest.approx(w) and r["step_index"] >= 1
+                            for r in st["robots"]
+                        )
+                        and st
+                    ),
+                    timeout=120,
+                )
                 assert state, s
             assert httpx.get(f"{base}/api/params").json()["walk"]["step_length"] == 0.2
 
@@ -94,12 +116,25 @@ def test_private_sessions_admission_close_and_a_worker_death():
             page.goto(base + "/")
             worker = httpx.get(f"{base}/api/health").json()["workers"][0]
             os.kill(worker["pid"], signal.SIGKILL)
-            health = wait_for(lambda: (h := httpx.get(f"{base}/api/health").json())[
-                "worker_deaths"] and h["status"] == "ok" and h, timeout=90)
+            health = wait_for(
+                lambda: (
+                    (h := httpx.get(f"{base}/api/health").json())["worker_deaths"]
+                    and h["status"] == "ok"
+                    and h
+                ),
+                timeout=90,
+            )
             assert health and f"pid {worker['pid']}" in health["worker_deaths"][0]
             page.locator("#status", has_text="stopped at").wait_for(timeout=30_000)
             assert kept in [s["id"] for s in _private(base)]  # the open browser's session
-            assert wait_for(lambda: httpx.get(  # runs on, restarted on the new worker
-                f"{base}/api/sessions/{kept}/state").json()["robots"][0]["t"] > 1.0, timeout=60)
+            assert wait_for(
+                lambda: (
+                    httpx.get(  # runs on, restarted on the new worker
+                        f"{base}/api/sessions/{kept}/state"
+                    ).json()["robots"][0]["t"]
+                    > 1.0
+                ),
+                timeout=60,
+            )
         finally:
             browser.close()

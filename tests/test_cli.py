@@ -44,8 +44,21 @@ def test_bad_arguments_exit_2_with_one_line(argv):
 
 def test_simulate_writes_every_json_key_and_csv(tmp_path, capsys):
     out, csv = tmp_path / "out.json", tmp_path / "series.csv"
-    code = main(["simulate", "--method", "mpc", "--step-length", "0.15", "--steps", "2",
-                 "--json", str(out), "--csv", str(csv)])
+    code = main(
+        [
+            "simulate",
+            "--method",
+            "mpc",
+            "--step-length",
+            "0.15",
+            "--steps",
+            "2",
+            "--json",
+            str(out),
+            "--csv",
+            str(csv),
+        ]
+    )
     assert code == 0
     summary = json.loads(out.read_text())
     assert set(SUMMARY_KEYS) <= set(summary)

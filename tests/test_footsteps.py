@@ -24,8 +24,9 @@ def test_footholds_advance_and_alternate(plan):
     np.testing.assert_allclose(plan.swing_to[:4, 0], L * np.arange(1, 5))
     np.testing.assert_allclose(plan.swing_to[:, 1], [hw, -hw, hw, -hw, hw])
     # first swing moves L, later ones 2L, the closing one L (feet together)
-    np.testing.assert_allclose(plan.swing_to[:, 0] - plan.swing_from[:, 0], [L, 2 * L, 2 * L,
-                                                                            2 * L, L])
+    np.testing.assert_allclose(
+        plan.swing_to[:, 0] - plan.swing_from[:, 0], [L, 2 * L, 2 * L, 2 * L, L]
+    )
     np.testing.assert_allclose(plan.feet_final[:, 0], [4 * L, 4 * L])
     fh = plan.footholds()
     assert fh.shape == (plan.n + 2, 3)
@@ -93,8 +94,15 @@ def test_replanned_keeps_started_steps(plan):
     new = WalkParams(step_length=0.3, step_time=1.0, dsp_ratio=0.3, n_steps=6)
     t_now = plan.step_start[1] + 0.3  # in step 1
     r = plan.replanned(new, t_now)
-    for name in ("step_start", "swing_side", "swing_from", "swing_to", "support_pos",
-                 "step_duration", "step_dsp"):
+    for name in (
+        "step_start",
+        "swing_side",
+        "swing_from",
+        "swing_to",
+        "support_pos",
+        "step_duration",
+        "step_dsp",
+    ):
         np.testing.assert_array_equal(getattr(r, name)[:2], getattr(plan, name)[:2])
     assert r.n_walking_steps == 6 and r.n == 7
     # the next foothold advances the new step length from the current step's landing point

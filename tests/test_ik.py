@@ -36,8 +36,9 @@ def test_log3():
         assert abs(np.linalg.norm(w) - angle) < 1e-6
         if 1e-3 < angle < np.pi - 1e-3:
             assert np.allclose(w, angle * axis, atol=1e-9)
-        assert np.allclose(_rot(w, np.linalg.norm(w)) if angle > 0 else np.eye(3),
-                           _rot(axis, angle), atol=1e-5)
+        assert np.allclose(
+            _rot(w, np.linalg.norm(w)) if angle > 0 else np.eye(3), _rot(axis, angle), atol=1e-5
+        )
 
 
 @pytest.mark.parametrize("method", ["fixed", "mpc", "redundancy"])
@@ -117,10 +118,12 @@ def test_redundancy_moves_waist_when_useful():
     J = _J(10)
     v = J[:, WAIST] * 1.0  # exactly the waist's own motion
     p = IkParams(damping=1e-3)
-    qd_fixed, _ = solve_ik(build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, "fixed"),
-                           QpSolver("daqp"))
-    qd_red, ok = solve_ik(build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, "redundancy"),
-                          QpSolver("daqp"))
+    qd_fixed, _ = solve_ik(
+        build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, "fixed"), QpSolver("daqp")
+    )
+    qd_red, ok = solve_ik(
+        build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, "redundancy"), QpSolver("daqp")
+    )
     assert ok and abs(qd_fixed[WAIST]) < 1e-12
     assert qd_red[WAIST] > 0.5
     assert np.sum(qd_red**2) < np.sum(qd_fixed**2)
@@ -131,7 +134,8 @@ def test_redundancy_pulls_waist_to_zero_in_null_space():
     J = _J(11)
     q = np.zeros(13)
     q[WAIST] = 0.3
-    qd, ok = solve_ik(build_ik(J, np.zeros(12), q, QMIN, QMAX, IkParams(), DT, "redundancy"),
-                      QpSolver("daqp"))
+    qd, ok = solve_ik(
+        build_ik(J, np.zeros(12), q, QMIN, QMAX, IkParams(), DT, "redundancy"), QpSolver("daqp")
+    )
     assert ok and qd[WAIST] < 0.0
     assert np.linalg.norm(J @ qd) < 1e-3

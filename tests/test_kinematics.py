@@ -86,9 +86,7 @@ def test_com_and_soles_match_mujoco(kin, mj):
         for side, site in enumerate(FOOT_SITES):
             oMf = kin.data.oMf[kin.sole_frame_ids[side]]
             np.testing.assert_allclose(oMf.translation, data.site(site).xpos, atol=1e-9)
-            np.testing.assert_allclose(
-                oMf.rotation, data.site(site).xmat.reshape(3, 3), atol=1e-9
-            )
+            np.testing.assert_allclose(oMf.rotation, data.site(site).xmat.reshape(3, 3), atol=1e-9)
 
 
 def test_compute_matches_mujoco_at_identity_base(kin, mj):

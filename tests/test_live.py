@@ -73,8 +73,9 @@ def test_step_length_in_force_follows_the_plan():
 def test_pacing_sleeps_to_the_wall_clock():
     """With free compute, the loop sleeps simulated time / speed on the wall clock."""
     wall = FakeWallClock()
-    sim = LiveSim(short_params(3), methods=["fixed"], speed=2.0, clock=wall.clock,
-                  sleep=wall.sleep).start()
+    sim = LiveSim(
+        short_params(3), methods=["fixed"], speed=2.0, clock=wall.clock, sleep=wall.sleep
+    ).start()
     try:
         frame = sim.wait_frame(timeout=30)
         while frame is not None and frame.clock < 1.5:
@@ -205,8 +206,13 @@ def test_history_has_one_column_set_per_method(running):
 
 def test_history_and_kept_frames_are_bounded():
     """Run unpaced for 20 s of simulated time keeping 3 s: memory stops growing."""
-    sim = LiveSim(short_params(20), methods=["fixed", "mpc"], sleep=lambda _s: None,
-                  keep_s=3.0, publish_hz=200.0)
+    sim = LiveSim(
+        short_params(20),
+        methods=["fixed", "mpc"],
+        sleep=lambda _s: None,
+        keep_s=3.0,
+        publish_hz=200.0,
+    )
     sim.history = type(sim.history)(seconds=8.0)
     sim.start()
     try:
@@ -255,5 +261,5 @@ def test_a_robot_restarted_alone_rejoins_in_phase(running):
     fixed, mpc = f.robots
     # in phase: both at the same point of the two-step cycle (the plans' step timing agrees)
     cycle = 2 * mpc.params.walk.step_time
-    offset = ((mpc.t - fixed.t) % cycle)
+    offset = (mpc.t - fixed.t) % cycle
     assert min(offset, cycle - offset) < 0.011, (mpc.t, fixed.t)

@@ -87,5 +87,6 @@ def test_lateral_distance_modes():
 
 def test_a_wrongly_signed_lateral_distance_is_refused():
     with pytest.raises(ValueError, match="left foot"):
-        reference_pelvic_angles(np.zeros((1, 2)), np.zeros((1, 2)), np.zeros((1, 2)), K,
-                                np.array([[-HW, -HW]]))
+        reference_pelvic_angles(
+            np.zeros((1, 2)), np.zeros((1, 2)), np.zeros((1, 2)), K, np.array([[-HW, -HW]])
+        )

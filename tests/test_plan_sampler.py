@@ -72,19 +72,20 @@ def reference(plan: FootstepPlan, t: float, margin: float) -> dict:
     hx, hy = max(FOOT_SIZE[0] / 2 - margin, 0), max(FOOT_SIZE[1] / 2 - margin, 0)
     out["zmp_lo"] = [min(g[0] for g in ground) - hx, min(g[1] for g in ground) - hy]
     out["zmp_hi"] = [max(g[0] for g in ground) + hx, max(g[1] for g in ground) + hy]
-    out.update(zmp_ref=zmp, p_left=feet[LEFT], p_right=feet[RIGHT], v_left=vel[LEFT],
-               v_right=vel[RIGHT])
+    out.update(
+        zmp_ref=zmp, p_left=feet[LEFT], p_right=feet[RIGHT], v_left=vel[LEFT], v_right=vel[RIGHT]
+    )
     return out
 
 
 def _plans() -> list[FootstepPlan]:
     base = plan_footsteps(WalkParams(step_length=0.3, dsp_ratio=0.25, n_steps=5))
-    other = WalkParams(step_length=0.15, step_time=0.9, dsp_ratio=0.1, foot_height=0.1,
-                       n_steps=7)
+    other = WalkParams(step_length=0.15, step_time=0.9, dsp_ratio=0.1, foot_height=0.1, n_steps=7)
     return [
         base,
-        plan_footsteps(WalkParams(step_length=0.42, step_time=1.4, n_steps=3), first_swing=RIGHT,
-                       x0=0.7),
+        plan_footsteps(
+            WalkParams(step_length=0.42, step_time=1.4, n_steps=3), first_swing=RIGHT, x0=0.7
+        ),
         base.replanned(other, base.step_start[2] + 0.3),  # per-step timings differ
     ]
 
@@ -93,11 +94,15 @@ def _plans() -> list[FootstepPlan]:
 def test_sampler_matches_the_reference_at_random_times(which):
     plan = _plans()[which]
     rng = np.random.default_rng(which)
-    times = np.concatenate([
-        rng.uniform(-0.5, plan.t_end + 0.5, 400),
-        plan.step_start, plan.liftoff_times(), plan.landing_times(),  # the phase boundaries
-        [0.0, plan.t_end, plan.walk_end],
-    ])
+    times = np.concatenate(
+        [
+            rng.uniform(-0.5, plan.t_end + 0.5, 400),
+            plan.step_start,
+            plan.liftoff_times(),
+            plan.landing_times(),  # the phase boundaries
+            [0.0, plan.t_end, plan.walk_end],
+        ]
+    )
     margin = 0.015
     got = plan.sample(times, margin)
     for i, t in enumerate(times):
@@ -110,8 +115,9 @@ def test_sampler_matches_the_reference_at_random_times(which):
                 assert int(have) == want, (key, t)
             else:
                 np.testing.assert_allclose(have, want, atol=1e-12, err_msg=f"{key} at t={t}")
-    np.testing.assert_array_equal(got.support_side[got.swing_side >= 0],
-                                  1 - got.swing_side[got.swing_side >= 0])
+    np.testing.assert_array_equal(
+        got.support_side[got.swing_side >= 0], 1 - got.swing_side[got.swing_side >= 0]
+    )
 
 
 def test_a_scalar_time_gives_one_row():

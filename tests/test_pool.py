@@ -60,8 +60,7 @@ def test_a_session_split_across_workers_keeps_step(pool):
         f = s.wait_applied(s.pause(), timeout=20)
         before = [r.t for r in f.robots]
         f = s.wait_applied(s.step(), timeout=20)
-        assert [round(r.t - b, 6) for r, b in zip(f.robots, before, strict=True)] == [
-            0.005] * 3
+        assert [round(r.t - b, 6) for r, b in zip(f.robots, before, strict=True)] == [0.005] * 3
     finally:
         pool.close(s)
     assert pool.robots() == 0
@@ -101,7 +100,8 @@ def test_a_dead_worker_is_reported_replaced_and_its_sessions_restart(pool):
             deadline = time.monotonic() + 90
             health = client.get("/api/health").json()
             while time.monotonic() < deadline and not (
-                health["worker_deaths"] and all(w["alive"] for w in health["workers"])
+                health["worker_deaths"]
+                and all(w["alive"] for w in health["workers"])
                 and health["status"] == "ok"
             ):
                 time.sleep(0.5)
@@ -110,7 +110,8 @@ def test_a_dead_worker_is_reported_replaced_and_its_sessions_restart(pool):
             assert f"pid {victim['pid']}" in health["worker_deaths"][-1]
             assert "1 session restarted" in health["worker_deaths"][-1]
             assert health["status"] == "ok" and victim["pid"] not in [
-                w["pid"] for w in health["workers"]]
+                w["pid"] for w in health["workers"]
+            ]
             # the session walks again on the new worker: its robots restarted together
             f = _walked(shared, 2.0)
             assert all(not r.fell for r in f.robots)

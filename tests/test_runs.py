@@ -35,8 +35,11 @@ def test_a_headless_run_beside_a_live_session_gives_the_same_summary():
     alone = run(cfg).summary()
 
     # Three live robots ticking as fast as they can in another thread (no pacing sleeps).
-    live = LiveSim(ControllerParams().replace(walk={"step_length": 0.3, "n_steps": 6}),
-                   methods=["fixed", "redundancy", "mpc"], sleep=lambda _s: None)
+    live = LiveSim(
+        ControllerParams().replace(walk={"step_length": 0.3, "n_steps": 6}),
+        methods=["fixed", "redundancy", "mpc"],
+        sleep=lambda _s: None,
+    )
     live.start()
     try:
         first = live.wait_frame(timeout=30)
@@ -51,8 +54,9 @@ def test_a_headless_run_beside_a_live_session_gives_the_same_summary():
 
 
 def test_runs_in_threads_at_once_match_a_run_alone():
-    params = ControllerParams().replace(method="redundancy", walk={"step_length": 0.25,
-                                                                    "n_steps": 3})
+    params = ControllerParams().replace(
+        method="redundancy", walk={"step_length": 0.25, "n_steps": 3}
+    )
     cfg = RunConfig(params=params)
     alone = run(cfg).summary()
     out: list[dict] = [{}, {}]

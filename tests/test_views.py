@@ -36,7 +36,9 @@ def test_a_view_shows_every_robot_whole(name, n, aspect):
 
 def test_more_robots_move_the_camera_back():
     for name in CAMERA_VIEWS:
-        d = [np.linalg.norm(np.subtract(*camera_pose(name, n, 1.3, name == "side")[:2]))
-             for n in (1, 2, 3)]
+        d = [
+            np.linalg.norm(np.subtract(*camera_pose(name, n, 1.3, name == "side")[:2]))
+            for n in (1, 2, 3)
+        ]
         assert d[0] < d[1] < d[2]
     assert ROBOT_SPACING > 1.0

@@ -13,6 +13,15 @@ from app.live.loop import FALL_RESET_S, LIVE_STEPS, live_params
 from app.live.session import LiveSim
 
 __all__ = [
-    "FALL_RESET_S", "LIVE_STEPS", "SPEED_MAX", "SPEED_MIN", "Horizon", "Intent", "LiveFrame",
-    "LiveSim", "RobotFrame", "check_methods", "live_params",
+    "FALL_RESET_S",
+    "LIVE_STEPS",
+    "SPEED_MAX",
+    "SPEED_MIN",
+    "Horizon",
+    "Intent",
+    "LiveFrame",
+    "LiveSim",
+    "RobotFrame",
+    "check_methods",
+    "live_params",
 ]

@@ -138,42 +138,69 @@ def horizon_of(session: Session) -> Horizon | None:
     cp = out.com_plan
     h = slice(2, None)  # the tick's plan sample: now, next tick, then the horizon
     ps = out.plan_sample
-    theta = (np.asarray(out.pelvis_plan.angles) if out.pelvis_plan is not None
-             else np.full(len(cp.times), out.waist_angle))
+    theta = (
+        np.asarray(out.pelvis_plan.angles)
+        if out.pelvis_plan is not None
+        else np.full(len(cp.times), out.waist_angle)
+    )
     return Horizon(
-        t=cp.times - out.t, com=cp.com.copy(), zmp=cp.zmp.copy(), zmp_ref=cp.zmp_ref.copy(),
-        zmp_lo=np.asarray(cp.zmp_lo).copy(), zmp_hi=np.asarray(cp.zmp_hi).copy(),
-        left_foot=ps.p_left[h, :2].copy(), right_foot=ps.p_right[h, :2].copy(),
-        theta_ref=out.theta_ref.copy(), theta=theta.copy(), lateral=out.lateral.copy(),
+        t=cp.times - out.t,
+        com=cp.com.copy(),
+        zmp=cp.zmp.copy(),
+        zmp_ref=cp.zmp_ref.copy(),
+        zmp_lo=np.asarray(cp.zmp_lo).copy(),
+        zmp_hi=np.asarray(cp.zmp_hi).copy(),
+        left_foot=ps.p_left[h, :2].copy(),
+        right_foot=ps.p_right[h, :2].copy(),
+        theta_ref=out.theta_ref.copy(),
+        theta=theta.copy(),
+        lateral=out.lateral.copy(),
         com_height=session.walker.com_height,
     )
 
 
-def robot_frame(session: Session, slot: int, clock: float, method: str, falls: int,
-                walks: int, last_success: bool | None, waiting: bool,
-                error: str | None) -> RobotFrame:
+def robot_frame(
+    session: Session,
+    slot: int,
+    clock: float,
+    method: str,
+    falls: int,
+    walks: int,
+    last_success: bool | None,
+    waiting: bool,
+    error: str | None,
+) -> RobotFrame:
     """A frame of one robot from its session (called by the loop, at the display rate)."""
     world, out, m = session.world, session.last, session.measured
     model, data = world.model, world.data
     plan = session.plan
     step_index = out.step_index if out is not None else -1
     return RobotFrame(
-        method=method, slot=slot, clock=clock, t=float(session.t), step_index=int(step_index),
+        method=method,
+        slot=slot,
+        clock=clock,
+        t=float(session.t),
+        step_index=int(step_index),
         in_dsp=bool(out is not None and not out.in_ssp and 0 <= step_index < plan.n),
         swing_side=int(out.swing_side) if out is not None else -1,
         step_length=plan.step_length(step_index),
-        fell=session.fell or error is not None, fall_reason=error or session.fall_reason,
-        walks_completed=walks, falls=falls, last_walk_success=last_success, waiting=waiting,
+        fell=session.fell or error is not None,
+        fall_reason=error or session.fall_reason,
+        walks_completed=walks,
+        falls=falls,
+        last_walk_success=last_success,
+        waiting=waiting,
         body_xpos=data.xpos.astype(np.float32),
         body_xmat=data.xmat.reshape(-1, 3, 3).astype(np.float32),
         hips=data.xpos[_body_ids(model, HIP_BODIES)].copy(),
         ankles=data.xpos[_body_ids(model, ANKLE_BODIES)].copy(),
-        soles=world.sole_positions(), sole_yaws=world.sole_yaws(),
-        in_contact=(m.contacts.in_contact.copy() if m is not None
-                    else np.ones(2, dtype=bool)),
+        soles=world.sole_positions(),
+        sole_yaws=world.sole_yaws(),
+        in_contact=(m.contacts.in_contact.copy() if m is not None else np.ones(2, dtype=bool)),
         support=m.support.copy() if m is not None else np.zeros((0, 2)),
         cop=(m.contacts.cop.copy() if m is not None and m.contacts.cop is not None else None),
-        com=world.com(), waist_angle=float(data.qpos[world.qpos_idx[0]]),
+        com=world.com(),
+        waist_angle=float(data.qpos[world.qpos_idx[0]]),
         waist_angle_cmd=out.waist_angle if out is not None else 0.0,
         yaw_momentum=m.yaw_momentum if m is not None else 0.0,
         energy=m.energy if m is not None else 0.0,
@@ -185,5 +212,7 @@ def robot_frame(session: Session, slot: int, clock: float, method: str, falls: i
         speed_limited=bool(out is not None and out.speed_limited),
         zmp_ref=out.zmp_ref.copy() if out is not None else None,
         pelvis_des=out.p_world_pelvis_des.copy() if out is not None else None,
-        horizon=horizon_of(session), plan=plan, params=session.walker.snapshot_params(),
+        horizon=horizon_of(session),
+        plan=plan,
+        params=session.walker.snapshot_params(),
     )

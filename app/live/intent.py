@@ -72,8 +72,9 @@ def check_speed(speed: float) -> float:
     return speed
 
 
-def check_push(method: str, force: Sequence[float], duration: float,
-               methods: Sequence[str]) -> tuple[tuple[float, float], float]:
+def check_push(
+    method: str, force: Sequence[float], duration: float, methods: Sequence[str]
+) -> tuple[tuple[float, float], float]:
     """Validated (force, duration) of a push on a robot shown now; ValueError otherwise."""
     if method not in methods:
         raise ValueError(f"no robot {method!r} is shown (robots: {', '.join(methods)})")

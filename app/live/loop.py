@@ -192,8 +192,10 @@ class LiveLoop:
         if old is None:  # join the session's time base (a part may start late)
             dt = intent.params.control_dt
             self.clock = round(max(self._target(intent), 0.0) / dt) * dt
-        if old is None or intent.methods != old.methods or (
-            intent.reset_requests != self._resets_done
+        if (
+            old is None
+            or intent.methods != old.methods
+            or (intent.reset_requests != self._resets_done)
         ):
             self.robots = {m: self._robot(m, intent.params) for m in intent.methods}
             self._resets_done = intent.reset_requests
@@ -207,8 +209,9 @@ class LiveLoop:
             self._restarted = True
         elif intent.params != old.params:
             for robot in self.robots.values():
-                robot.session.walker.set_params(dataclasses.replace(intent.params,
-                                                                    method=robot.method))
+                robot.session.walker.set_params(
+                    dataclasses.replace(intent.params, method=robot.method)
+                )
         if old is None or intent.anchor != old.anchor or intent.paused != old.paused:
             self._rates = _Rates()
         if not intent.paused:
@@ -256,8 +259,10 @@ class LiveLoop:
                 continue
             if intent.step_until == "liftoff" and out.in_ssp and not was_ssp:
                 return
-            if intent.step_until == "landing" and was_ssp and (
-                not out.in_ssp or out.step_index != step
+            if (
+                intent.step_until == "landing"
+                and was_ssp
+                and (not out.in_ssp or out.step_index != step)
             ):
                 return
             was_ssp, step = out.in_ssp, out.step_index
@@ -344,12 +349,20 @@ class LiveLoop:
             if out is None or m is None:  # not started yet (or standing by): a gap
                 continue
             walking = 0 <= out.step_index < s.plan.n
-            row = np.array([
-                self.clock, s.t, math.degrees(m.waist_angle), math.degrees(out.waist_rate),
-                m.yaw_momentum, out.kappa_legs, robot.two_step_energy(),
-                (0.0 if out.in_ssp else 1.0) if walking else math.nan,
-                out.step_index, float(robot.fell),
-            ])
+            row = np.array(
+                [
+                    self.clock,
+                    s.t,
+                    math.degrees(m.waist_angle),
+                    math.degrees(out.waist_rate),
+                    m.yaw_momentum,
+                    out.kappa_legs,
+                    robot.two_step_energy(),
+                    (0.0 if out.in_ssp else 1.0) if walking else math.nan,
+                    out.step_index,
+                    float(robot.fell),
+                ]
+            )
             self._rows.setdefault(method, []).append(row)
 
     def _publish(self, intent: Intent) -> None:
@@ -360,16 +373,31 @@ class LiveLoop:
         self._rows = {}
         self.seq += 1
         frame = LiveFrame(
-            seq=self.seq, clock=self.clock, paused=intent.paused, speed=intent.speed,
-            realtime_factor=rtf, compute_realtime_factor=compute,
-            intent_version=intent.version, steps_done=self.steps_done,
+            seq=self.seq,
+            clock=self.clock,
+            paused=intent.paused,
+            speed=intent.speed,
+            realtime_factor=rtf,
+            compute_realtime_factor=compute,
+            intent_version=intent.version,
+            steps_done=self.steps_done,
             pushes_done=self.pushes_done,
             robots=tuple(
-                robot_frame(r.session, slot, self.clock, r.method, r.falls, r.walks_completed,
-                            r.last_walk_success, r.waiting, r.error)
+                robot_frame(
+                    r.session,
+                    slot,
+                    self.clock,
+                    r.method,
+                    r.falls,
+                    r.walks_completed,
+                    r.last_walk_success,
+                    r.waiting,
+                    r.error,
+                )
                 for slot, r in enumerate(self.robots.values())
             ),
-            rows=rows, restarted=self._restarted,
+            rows=rows,
+            restarted=self._restarted,
         )
         self._restarted = self._dirty = False
         self._last_publish = self._clock()

@@ -57,8 +57,10 @@ class WorkerDeath:
         when = time.strftime("%H:%M:%S", time.localtime(self.time))
         what = f"exit code {self.exitcode}" if self.exitcode is not None else "lost"
         n = len(self.sessions)
-        return (f"worker {self.worker} (pid {self.pid}) stopped at {when} ({what}); "
-                f"{n} session{'s' if n != 1 else ''} restarted")
+        return (
+            f"worker {self.worker} (pid {self.pid}) stopped at {when} ({what}); "
+            f"{n} session{'s' if n != 1 else ''} restarted"
+        )
 
 
 class RemoteSession(SessionView):
@@ -120,15 +122,20 @@ class RemoteSession(SessionView):
             crtf = [p.compute_realtime_factor for p in parts]
             self._seq += 1
             merged = dataclasses.replace(
-                lead, seq=self._seq, clock=min(p.clock for p in parts),  # the slowest part
+                lead,
+                seq=self._seq,
+                clock=min(p.clock for p in parts),  # the slowest part
                 paused=all(p.paused for p in parts),
                 realtime_factor=None if None in rtf else min(rtf),  # type: ignore[type-var]
                 compute_realtime_factor=None if None in crtf else min(crtf),  # type: ignore
                 intent_version=min(p.intent_version for p in parts),
                 steps_done=min(p.steps_done for p in parts),
                 pushes_done=min(p.pushes_done for p in parts),
-                robots=tuple(dataclasses.replace(p.robots[0], slot=i)
-                             for i, p in enumerate(parts) if p.robots),
+                robots=tuple(
+                    dataclasses.replace(p.robots[0], slot=i)
+                    for i, p in enumerate(parts)
+                    if p.robots
+                ),
                 rows={m: np.concatenate(r) for m, r in self._rows.items()},
                 restarted=self._restarted,
             )
@@ -163,8 +170,7 @@ class _Worker:
 class WorkerPool:
     """``n_workers`` processes running the robots of live sessions (module docstring)."""
 
-    def __init__(self, n_workers: int, robots_per_worker: int = 3,
-                 publish_hz: float = PUBLISH_HZ):
+    def __init__(self, n_workers: int, robots_per_worker: int = 3, publish_hz: float = PUBLISH_HZ):
         if n_workers < 1 or robots_per_worker < 1:
             raise ValueError("need at least one worker and one robot per worker")
         self.n_workers = n_workers
@@ -192,9 +198,12 @@ class WorkerPool:
         env = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
         os.environ.update(OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
         try:
-            proc = self._ctx.Process(target=worker_main,
-                                     args=(cmd_recv, frm_send, self.publish_hz),
-                                     name=f"pelvic-walk-worker-{index}", daemon=True)
+            proc = self._ctx.Process(
+                target=worker_main,
+                args=(cmd_recv, frm_send, self.publish_hz),
+                name=f"pelvic-walk-worker-{index}",
+                daemon=True,
+            )
             proc.start()
         finally:
             for k, v in env.items():
@@ -205,8 +214,9 @@ class WorkerPool:
         cmd_recv.close()
         frm_send.close()
         w = _Worker(index, proc, cmd_send, frm_recv)
-        threading.Thread(target=self._receive, args=(w,), name=f"worker-{index}-frames",
-                         daemon=True).start()
+        threading.Thread(
+            target=self._receive, args=(w,), name=f"worker-{index}-frames", daemon=True
+        ).start()
         return w
 
     def _receive(self, w: _Worker) -> None:
@@ -237,8 +247,11 @@ class WorkerPool:
         dead.process.join(1.0)
         with self._lock:
             held = {s.sid: s for s, _m in dead.parts.values()}
-            self.deaths.append(WorkerDeath(dead.index, dead.process.pid,
-                                           dead.process.exitcode, time.time(), tuple(held)))
+            self.deaths.append(
+                WorkerDeath(
+                    dead.index, dead.process.pid, dead.process.exitcode, time.time(), tuple(held)
+                )
+            )
             log.error(self.deaths[-1].describe())
             new = self._spawn(dead.index)
             self._workers[dead.index] = new
@@ -272,8 +285,10 @@ class WorkerPool:
             need = len([m for m in methods if m not in session.parts])
             room = sum(self.robots_per_worker - w.robots for w in self._workers)
             if need > room:
-                raise PoolFull(f"the workers hold {self.n_workers} x {self.robots_per_worker}"
-                               f" robots and have room for {room} more, not {need}")
+                raise PoolFull(
+                    f"the workers hold {self.n_workers} x {self.robots_per_worker}"
+                    f" robots and have room for {room} more, not {need}"
+                )
 
     def sync_parts(self, session: RemoteSession, intent: Intent) -> None:
         """Open a part for every new robot of the session, close those it no longer shows."""
@@ -289,8 +304,7 @@ class WorkerPool:
                         raise PoolFull("no worker has room for another robot")
                     self._open_part(min(free, key=lambda x: x.robots), session, method)
 
-    def open(self, intent: Intent, keep_s: float = KEEP_S, sid: str | None = None
-             ) -> RemoteSession:
+    def open(self, intent: Intent, keep_s: float = KEEP_S, sid: str | None = None) -> RemoteSession:
         """A new session (its robots placed where there is room); PoolFull otherwise."""
         with self._lock:
             sid = sid or f"s{len(self.sessions) + 1}"
@@ -323,8 +337,15 @@ class WorkerPool:
     def workers(self) -> list[dict]:
         """One line per worker for /api/health and /api/sessions."""
         with self._lock:
-            return [{"index": w.index, "pid": w.process.pid, "alive": w.process.is_alive(),
-                     "robots": sorted(w.parts)} for w in self._workers]
+            return [
+                {
+                    "index": w.index,
+                    "pid": w.process.pid,
+                    "alive": w.process.is_alive(),
+                    "robots": sorted(w.parts),
+                }
+                for w in self._workers
+            ]
 
     def stop(self) -> None:
         self._stopped = True

@@ -45,8 +45,14 @@ class _Entry:
 class SessionRegistry:
     """Sessions by id (any thread). ``close()`` ends them all."""
 
-    def __init__(self, mode: str, shared: SessionView, pool: WorkerPool | None = None,
-                 idle_s: float = 300.0, intent: Intent | None = None):
+    def __init__(
+        self,
+        mode: str,
+        shared: SessionView,
+        pool: WorkerPool | None = None,
+        idle_s: float = 300.0,
+        intent: Intent | None = None,
+    ):
         if mode not in MODES:
             raise ValueError(f"sessions mode must be one of {', '.join(MODES)}, got {mode!r}")
         if mode == "private" and pool is None:
@@ -63,8 +69,9 @@ class SessionRegistry:
         self._reaper.start()
 
     @classmethod
-    def start(cls, mode: str, intent: Intent, pool: WorkerPool | None = None,
-              idle_s: float = 300.0) -> SessionRegistry:
+    def start(
+        cls, mode: str, intent: Intent, pool: WorkerPool | None = None, idle_s: float = 300.0
+    ) -> SessionRegistry:
         """Start the shared session (in a worker, or a thread without a pool) and the registry."""
         if pool is None:
             shared: SessionView = LiveSim(intent.params, intent.methods, intent.speed).start()
@@ -94,8 +101,9 @@ class SessionRegistry:
     def open_private(self, owner: str | None = None) -> tuple[str, SessionView]:
         """A new private session (PoolFull when the workers are full)."""
         if self.mode != "private" or self.pool is None:
-            raise SessionsDisabled("the server runs one shared session "
-                                   "(start it with --sessions private)")
+            raise SessionsDisabled(
+                "the server runs one shared session (start it with --sessions private)"
+            )
         sid = f"p{next(self._ids)}"
         session = self.pool.open(self._initial, sid=sid)
         with self._lock:
@@ -124,15 +132,18 @@ class SessionRegistry:
         out = []
         for sid, e in entries:
             frame = e.session.frame()
-            out.append({
-                "id": sid, "kind": "shared" if sid == SHARED else "private",
-                "owner": e.owner,
-                "worker_pids": getattr(e.session, "worker_pids", []),
-                "methods": list(e.session.intent.methods),
-                "realtime_factor": frame.realtime_factor if frame else None,
-                "paused": e.session.intent.paused,
-                "idle_s": round(time.monotonic() - e.last_used, 1),
-            })
+            out.append(
+                {
+                    "id": sid,
+                    "kind": "shared" if sid == SHARED else "private",
+                    "owner": e.owner,
+                    "worker_pids": getattr(e.session, "worker_pids", []),
+                    "methods": list(e.session.intent.methods),
+                    "realtime_factor": frame.realtime_factor if frame else None,
+                    "paused": e.session.intent.paused,
+                    "idle_s": round(time.monotonic() - e.last_used, 1),
+                }
+            )
         return out
 
     def count_private(self) -> int:
@@ -150,8 +161,11 @@ class SessionRegistry:
         while not self._stop.wait(1.0):
             now = time.monotonic()
             with self._lock:
-                idle = [sid for sid, e in self._entries.items()
-                        if sid != SHARED and e.owner is None and now - e.last_used > self.idle_s]
+                idle = [
+                    sid
+                    for sid, e in self._entries.items()
+                    if sid != SHARED and e.owner is None and now - e.last_used > self.idle_s
+                ]
             for sid in idle:
                 self.close(sid)
 
@@ -171,5 +185,4 @@ class SessionRegistry:
             self.pool.close(shared)  # type: ignore[arg-type]
 
 
-__all__ = ["MODES", "SHARED", "NoSuchSession", "PoolFull", "SessionRegistry",
-           "SessionsDisabled"]
+__all__ = ["MODES", "SHARED", "NoSuchSession", "PoolFull", "SessionRegistry", "SessionsDisabled"]

@@ -43,12 +43,19 @@ KEEP_S = 40.0  # [s] of frames kept for scrubbing and recording (at least 30 s)
 PLOT_HISTORY_S = 60.0  # [s] of plot rows kept
 
 
-def initial_intent(params: ControllerParams | None = None,
-                   methods: Sequence[str] = DEFAULT_METHODS, speed: float = 1.0) -> Intent:
+def initial_intent(
+    params: ControllerParams | None = None,
+    methods: Sequence[str] = DEFAULT_METHODS,
+    speed: float = 1.0,
+) -> Intent:
     """A session's first intent (validated); its time base starts when the session opens."""
     params = (params or live_params()).validated()
-    return Intent(params=params, methods=check_methods(methods), speed=check_speed(speed),
-                  anchor=(time.monotonic(), 0.0))
+    return Intent(
+        params=params,
+        methods=check_methods(methods),
+        speed=check_speed(speed),
+        anchor=(time.monotonic(), 0.0),
+    )
 
 
 CATCH_UP_S = 0.3  # [s] a loop this far behind its time base: the base moves (no rush after;
@@ -63,8 +70,13 @@ class SessionView:
         keep_s: seconds of frames kept for scrubbing and recording.
     """
 
-    def __init__(self, intent: Intent, keep_s: float = KEEP_S,
-                 wall: Callable[[], float] = time.monotonic, start_delay: float = 0.0):
+    def __init__(
+        self,
+        intent: Intent,
+        keep_s: float = KEEP_S,
+        wall: Callable[[], float] = time.monotonic,
+        start_delay: float = 0.0,
+    ):
         self._wall = wall  # the monotonic wall clock of the time base (shared by processes)
         self.start_delay = start_delay  # [s] robots (re)built start this much later, so that
         # loops in other processes, which take a moment to build theirs, start with them
@@ -135,16 +147,23 @@ class SessionView:
     def _restart_at(self, cur: Intent) -> dict:
         """Fields that rebuild every robot, to start together ``start_delay`` from now."""
         delay = 0.0 if cur.paused else self.start_delay
-        return {"reset_requests": cur.reset_requests + 1,
-                "start_clock": self.clock_now(cur) + delay}
+        return {
+            "reset_requests": cur.reset_requests + 1,
+            "start_clock": self.clock_now(cur) + delay,
+        }
 
     def step(self, until: str = "tick") -> Intent:
         """Pause (if running) and advance one tick, or to the next lift-off or landing."""
         if until not in STEP_UNTIL:
             raise ValueError(f"step until must be one of {', '.join(STEP_UNTIL)}, got {until!r}")
         self._shown = None
-        return self._box.modify(lambda cur: {
-            "paused": True, "step_requests": cur.step_requests + 1, "step_until": until})
+        return self._box.modify(
+            lambda cur: {
+                "paused": True,
+                "step_requests": cur.step_requests + 1,
+                "step_until": until,
+            }
+        )
 
     def reset(self) -> Intent:
         """Restart every robot from standing (t = 0), all together."""
@@ -204,9 +223,11 @@ class SessionView:
             ticket = Intent(params=self.intent.params, version=ticket)
         last_push = ticket.pushes[-1].number if ticket.pushes else 0
         return self._wait(
-            lambda f: f.intent_version >= ticket.version
-            and (f.steps_done >= ticket.step_requests or not f.paused)
-            and f.pushes_done >= last_push,
+            lambda f: (
+                f.intent_version >= ticket.version
+                and (f.steps_done >= ticket.step_requests or not f.paused)
+                and f.pushes_done >= last_push
+            ),
             timeout,
         )
 
@@ -243,9 +264,7 @@ class SessionView:
             return
         if self.clock_now(intent) - frame.clock > CATCH_UP_S:
             self._last_catch_up = now
-            self._box.modify(lambda cur: {"anchor": (now, frame.clock)}
-                             if not cur.paused else {})
-
+            self._box.modify(lambda cur: {"anchor": (now, frame.clock)} if not cur.paused else {})
 
 
 class LiveSim(SessionView):
@@ -273,9 +292,14 @@ class LiveSim(SessionView):
         self._wake = threading.Event()  # set on every intent change (cuts a pacing sleep)
         super().__init__(initial_intent(params, methods, speed), keep_s, wall=clock)
         self._thread: threading.Thread | None = None
-        self.loop = LiveLoop(self._box.get, self.receive, clock=clock,
-                             sleep=sleep or self._pause_for, idle=self._pause_for,
-                             publish_hz=publish_hz)
+        self.loop = LiveLoop(
+            self._box.get,
+            self.receive,
+            clock=clock,
+            sleep=sleep or self._pause_for,
+            idle=self._pause_for,
+            publish_hz=publish_hz,
+        )
 
     def _intent_changed(self) -> None:
         self._wake.set()

@@ -73,8 +73,12 @@ class _Hosted:
         self._intent = intent
         self._wake = threading.Event()
         self._stop = threading.Event()
-        self.loop = LiveLoop(lambda: self._intent, lambda f: send(("frame", sid, f)),
-                             sleep=self._wait, publish_hz=publish_hz)
+        self.loop = LiveLoop(
+            lambda: self._intent,
+            lambda f: send(("frame", sid, f)),
+            sleep=self._wait,
+            publish_hz=publish_hz,
+        )
         self._send = send
         self.thread = threading.Thread(target=self._run, name=f"session-{sid}", daemon=True)
 
@@ -96,8 +100,9 @@ class _Hosted:
             while not self._stop.is_set():
                 self.loop.iterate()
         except Exception as exc:  # noqa: BLE001 - reported to the web process
-            self._send(("error", self.sid, f"{type(exc).__name__}: {exc}\n"
-                        f"{traceback.format_exc(limit=5)}"))
+            self._send(
+                ("error", self.sid, f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=5)}")
+            )
 
 
 class Outbox:
@@ -121,10 +126,13 @@ class Outbox:
             old = self._frames.get(pid)
             if old is not None:  # unsent: keep its rows, show the newer state
                 self.dropped += 1
-                rows = {m: np.concatenate([old.rows[m], r]) if m in old.rows else r
-                        for m, r in frame.rows.items()}
-                frame = dataclasses.replace(frame, rows={**old.rows, **rows},
-                                            restarted=old.restarted or frame.restarted)
+                rows = {
+                    m: np.concatenate([old.rows[m], r]) if m in old.rows else r
+                    for m, r in frame.rows.items()
+                }
+                frame = dataclasses.replace(
+                    frame, rows={**old.rows, **rows}, restarted=old.restarted or frame.restarted
+                )
             self._frames[pid] = frame
             self._cond.notify()
 
@@ -146,8 +154,9 @@ class Outbox:
                     self._cond.wait()
                 other, self._other = self._other, []
                 frames, self._frames = self._frames, {}
-                batch = other + [("frame", pid, self.codec.encode(pid, f))
-                                 for pid, f in frames.items()]
+                batch = other + [
+                    ("frame", pid, self.codec.encode(pid, f)) for pid, f in frames.items()
+                ]
             for message in batch:
                 try:
                     self._send_bytes(pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL))
@@ -180,7 +189,7 @@ def worker_main(commands: Connection, frames: Connection, publish_hz: float) -> 
         except (EOFError, OSError):
             break  # the web process is gone
         if kind == "open":
-            intent, = payload
+            (intent,) = payload
             hosted[pid] = _Hosted(pid, intent, send, publish_hz)
             hosted[pid].thread.start()
         elif kind == "intent" and pid in hosted:

@@ -17,31 +17,38 @@ KAPPA_SINGULAR = 1000.0
 LANDING_ERROR_CLEAN = 0.02  # [m]
 
 COLUMNS = (
-    "t",                  # [s]
-    "waist_angle",        # [rad] measured waist yaw
-    "waist_angle_cmd",    # [rad] commanded waist yaw
-    "waist_rate",         # [rad/s] commanded waist yaw rate
-    "theta_ref",          # [rad] first sample of the reference pelvic angle
-    "yaw_momentum",       # [kg m^2/s] whole body about the CoM, measured (MuJoCo)
-    "h_low",              # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
-    "h_up",               # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
-    "kappa",              # condition number of J_low, 12 x 13 (eq. 45), every method alike
-    "kappa_legs",         # condition number of J_low's 12 leg columns, every method alike
-    "cop_x", "cop_y",     # [m] centre of pressure of the foot contact forces (nan if none)
-    "zmp_in_support",     # 1 if the CoP is inside the support polygon
-    "balance_margin",     # [m] CoP to the support polygon's edge, > 0 inside
-    "sole_tilt",          # [rad] largest tilt of a foot in contact
-    "zmp_ref_x", "zmp_ref_y",
-    "lipm_zmp_x", "lipm_zmp_y",  # [m] ZMP of the LIPM from the measured CoM (paper Fig. 15)
-    "com_x", "com_y", "com_z",   # [m] measured CoM (MuJoCo)
-    "com_des_x", "com_des_y",    # [m] desired CoM (CoM MPC)
-    "reach_left", "reach_right", # hip-to-ankle distance / leg length (commanded)
-    "energy",             # [J] cumulative positive joint work (eq. 44), 200 Hz samples
-    "energy_substep",     # [J] the same from every 1 ms substep
-    "tick_ms",            # [ms] controller tick time
+    "t",  # [s]
+    "waist_angle",  # [rad] measured waist yaw
+    "waist_angle_cmd",  # [rad] commanded waist yaw
+    "waist_rate",  # [rad/s] commanded waist yaw rate
+    "theta_ref",  # [rad] first sample of the reference pelvic angle
+    "yaw_momentum",  # [kg m^2/s] whole body about the CoM, measured (MuJoCo)
+    "h_low",  # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
+    "h_up",  # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
+    "kappa",  # condition number of J_low, 12 x 13 (eq. 45), every method alike
+    "kappa_legs",  # condition number of J_low's 12 leg columns, every method alike
+    "cop_x",
+    "cop_y",  # [m] centre of pressure of the foot contact forces (nan if none)
+    "zmp_in_support",  # 1 if the CoP is inside the support polygon
+    "balance_margin",  # [m] CoP to the support polygon's edge, > 0 inside
+    "sole_tilt",  # [rad] largest tilt of a foot in contact
+    "zmp_ref_x",
+    "zmp_ref_y",
+    "lipm_zmp_x",
+    "lipm_zmp_y",  # [m] ZMP of the LIPM from the measured CoM (paper Fig. 15)
+    "com_x",
+    "com_y",
+    "com_z",  # [m] measured CoM (MuJoCo)
+    "com_des_x",
+    "com_des_y",  # [m] desired CoM (CoM MPC)
+    "reach_left",
+    "reach_right",  # hip-to-ankle distance / leg length (commanded)
+    "energy",  # [J] cumulative positive joint work (eq. 44), 200 Hz samples
+    "energy_substep",  # [J] the same from every 1 ms substep
+    "tick_ms",  # [ms] controller tick time
     "step_index",
     "in_ssp",
-    "speed_limited",      # 1 if a joint velocity sat at the IK's speed limit
+    "speed_limited",  # 1 if a joint velocity sat at the IK's speed limit
 )
 
 

@@ -77,7 +77,11 @@ class Session:
         self.world.reset(cfg.seed, cfg.perturbation)
         q0 = self.world.keyframe_joints()
         self.walker = Walker(
-            params, self.kin, q0, self.world.base_position(), backend=cfg.backend,
+            params,
+            self.kin,
+            q0,
+            self.world.base_position(),
+            backend=cfg.backend,
             clock=time.perf_counter,
         )
         n_ticks = int(math.ceil(self.walker.plan.t_end / params.control_dt)) + 10
@@ -145,8 +149,11 @@ class Session:
         contacts = world.contacts()
         com = world.com()
         vel = world.data.subtree_linvel[world.root_id][:2].copy()
-        acc = (np.zeros(2) if self._com_vel_prev is None
-               else (vel - self._com_vel_prev) / world.control_dt)
+        acc = (
+            np.zeros(2)
+            if self._com_vel_prev is None
+            else (vel - self._com_vel_prev) / world.control_dt
+        )
         self._com_vel_prev = vel
         support = world.support_polygon(contacts.in_contact)
         if contacts.cop is None:
@@ -156,9 +163,16 @@ class Session:
             margin = polygon_margin(contacts.cop, support)
             tilt = float(np.max(world.sole_tilts()[contacts.in_contact]))
         return Measurement(
-            t=self.walker.t, waist_angle=waist_angle, contacts=contacts, support=support,
-            cop_inside=inside, balance_margin=margin, sole_tilt=tilt, com=com,
-            lipm_zmp=com[:2] - (com[2] / GRAVITY) * acc, yaw_momentum=world.yaw_momentum(),
+            t=self.walker.t,
+            waist_angle=waist_angle,
+            contacts=contacts,
+            support=support,
+            cop_inside=inside,
+            balance_margin=margin,
+            sole_tilt=tilt,
+            com=com,
+            lipm_zmp=com[:2] - (com[2] / GRAVITY) * acc,
+            yaw_momentum=world.yaw_momentum(),
             energy=float(world.energy_ctrl_per_joint.sum()),
             energy_substep=float(world.energy_substep_per_joint.sum()),
         )
@@ -167,16 +181,42 @@ class Session:
         """One row of the time series, in the order of app.sim.metrics.COLUMNS."""
         cop = m.contacts.cop
         nan = math.nan
-        self.series.append_values((
-            m.t, m.waist_angle, out.waist_angle, out.waist_rate, out.theta_ref[0],
-            m.yaw_momentum, out.h_low, out.h_up, out.kappa, out.kappa_legs,
-            cop[0] if cop is not None else nan, cop[1] if cop is not None else nan,
-            nan if m.cop_inside is None else float(m.cop_inside), m.balance_margin,
-            m.sole_tilt, out.zmp_ref[0], out.zmp_ref[1], m.lipm_zmp[0], m.lipm_zmp[1],
-            m.com[0], m.com[1], m.com[2], out.p_world_com_des[0], out.p_world_com_des[1],
-            out.reach[0], out.reach[1], m.energy, m.energy_substep, tick_ms,
-            out.step_index, float(out.in_ssp), float(out.speed_limited),
-        ))
+        self.series.append_values(
+            (
+                m.t,
+                m.waist_angle,
+                out.waist_angle,
+                out.waist_rate,
+                out.theta_ref[0],
+                m.yaw_momentum,
+                out.h_low,
+                out.h_up,
+                out.kappa,
+                out.kappa_legs,
+                cop[0] if cop is not None else nan,
+                cop[1] if cop is not None else nan,
+                nan if m.cop_inside is None else float(m.cop_inside),
+                m.balance_margin,
+                m.sole_tilt,
+                out.zmp_ref[0],
+                out.zmp_ref[1],
+                m.lipm_zmp[0],
+                m.lipm_zmp[1],
+                m.com[0],
+                m.com[1],
+                m.com[2],
+                out.p_world_com_des[0],
+                out.p_world_com_des[1],
+                out.reach[0],
+                out.reach[1],
+                m.energy,
+                m.energy_substep,
+                tick_ms,
+                out.step_index,
+                float(out.in_ssp),
+                float(out.speed_limited),
+            )
+        )
 
     def _bookkeep(self, out: TickOutput, m: Measurement) -> None:
         """Step starts (energy), landing errors, falls, ZMP and speed-limit counts."""
@@ -189,7 +229,8 @@ class Session:
         k, n = out.step_index, plan.n
         if 0 <= k < n and k not in self.energy_at_step_start and not self.fell:
             self.energy_at_step_start[k] = (
-                world.energy_ctrl_per_joint.copy(), world.energy_substep_per_joint.copy()
+                world.energy_ctrl_per_joint.copy(),
+                world.energy_substep_per_joint.copy(),
             )
         # Landing error half a DSP after each touch-down, relative to the support foot
         # (per-step timing: a replan changes the timing of later steps only).
@@ -218,8 +259,11 @@ class Session:
         The live plots and Table 1 both read this.
         """
         n_walk = self.walker.plan.n_walking_steps
-        starts = [self.energy_at_step_start[k][int(substep)] for k in range(1, n_walk + 1)
-                  if k in self.energy_at_step_start]
+        starts = [
+            self.energy_at_step_start[k][int(substep)]
+            for k in range(1, n_walk + 1)
+            if k in self.energy_at_step_start
+        ]
         n_joints = len(self.world.energy_ctrl_per_joint)
         return two_step_windows(np.array(starts).reshape(len(starts), n_joints))
 

@@ -30,11 +30,29 @@ if TYPE_CHECKING:
     from app.sim.session import Session
 
 SUMMARY_KEYS = (
-    "method", "arms", "step_length", "step_time", "steps_planned", "steps_completed",
-    "success", "fell", "fall_time", "landing_error_max", "waist_yaw_max_deg",
-    "waist_yaw_rate_max_deg_s", "yaw_momentum_peak", "energy_two_step_mean",
-    "energy_two_step_std", "condition_number_max", "zmp_in_support_ratio", "solver_failures",
-    "sim_time", "wall_time", "realtime_factor", "tick_ms_median", "tick_ms_p99",
+    "method",
+    "arms",
+    "step_length",
+    "step_time",
+    "steps_planned",
+    "steps_completed",
+    "success",
+    "fell",
+    "fall_time",
+    "landing_error_max",
+    "waist_yaw_max_deg",
+    "waist_yaw_rate_max_deg_s",
+    "yaw_momentum_peak",
+    "energy_two_step_mean",
+    "energy_two_step_std",
+    "condition_number_max",
+    "zmp_in_support_ratio",
+    "solver_failures",
+    "sim_time",
+    "wall_time",
+    "realtime_factor",
+    "tick_ms_median",
+    "tick_ms_p99",
 )
 DEG = 180.0 / np.pi
 
@@ -105,9 +123,11 @@ def summarize(session: Session) -> dict[str, Any]:
         "landing_errors": landed,
         "energy_two_step_windows": windows.tolist(),
         "energy_two_step_per_joint_mean": (
-            per_joint.mean(axis=0).tolist() if len(per_joint) else None),
+            per_joint.mean(axis=0).tolist() if len(per_joint) else None
+        ),
         "energy_two_step_mean_substep": (
-            float(np.mean(windows_substep)) if len(windows_substep) else None),
+            float(np.mean(windows_substep)) if len(windows_substep) else None
+        ),
         "energy_two_step_windows_substep": windows_substep.tolist(),
         "condition_number_legs_max": kappa_legs_max,
         "balance_margin_min": float(np.min(margin)) if len(margin) else None,

@@ -13,14 +13,20 @@ from typing import Any
 # and optionally the methods to compare.
 PRESETS: dict[str, dict[str, Any]] = {
     "Paper: 0.30 m steps": {"walk": {"step_length": 0.30, "step_time": 1.2}},
-    "Paper: 0.40 m steps": {"walk": {"step_length": 0.40, "step_time": 1.2},
-                            "methods": ["fixed", "mpc"]},
+    "Paper: 0.40 m steps": {
+        "walk": {"step_length": 0.40, "step_time": 1.2},
+        "methods": ["fixed", "mpc"],
+    },
     # Our fixed pelvis walks cleanly to 0.37 m; at 0.38-0.39 m its swing knee straightens
     # (kappa > 1000) and the IK hits the joint-speed limit (report section 2). Paper: 0.35 m.
     "Where our fixed pelvis fails: 0.39 m (paper: 0.35 m)": {
-        "walk": {"step_length": 0.39, "step_time": 1.2}, "methods": ["fixed", "mpc"]},
-    "All three methods, 0.30 m": {"walk": {"step_length": 0.30, "step_time": 1.2},
-                                  "methods": ["fixed", "redundancy", "mpc"]},
+        "walk": {"step_length": 0.39, "step_time": 1.2},
+        "methods": ["fixed", "mpc"],
+    },
+    "All three methods, 0.30 m": {
+        "walk": {"step_length": 0.30, "step_time": 1.2},
+        "methods": ["fixed", "redundancy", "mpc"],
+    },
     "Defaults": {"walk": {"step_length": 0.2, "step_time": 1.2}, "reset_groups": True},
 }
 
@@ -136,11 +142,13 @@ def warnings_for(params: Any) -> list[str]:
         out.append(
             f"The MPC horizon ({params.com.horizon:.1f} s) is shorter than one step "
             f"({w.step_time:.2f} s): the CoM MPC cannot see the next support foot before the "
-            "step starts, so the CoM arrives late and the robots tend to fall.")
+            "step starts, so the CoM arrives late and the robots tend to fall."
+        )
     if w.dsp_ratio * w.step_time < 0.1:
         out.append(
             f"A double support of {1000 * w.dsp_ratio * w.step_time:.0f} ms leaves the CoM "
-            "very little time to move to the new support foot.")
+            "very little time to move to the new support foot."
+        )
     if params.pelvis.k_pel == 0.0:
         out.append("k_pel = 0: the reference pelvic angle is 0, the MPC plans no rotation.")
     beyond = [m for m, lim in CLEAN_LIMIT_M.items() if w.step_length > lim + 1e-9]
@@ -148,5 +156,6 @@ def warnings_for(params: Any) -> list[str]:
         out.append(
             f"{w.step_length:.2f} m is beyond the longest clean step measured here for "
             f"{', '.join(beyond)} (fixed {CLEAN_LIMIT_M['fixed']:.2f} m, rotating "
-            f"{CLEAN_LIMIT_M['mpc']:.2f} m at 1.2 s steps): watch the status badges.")
+            f"{CLEAN_LIMIT_M['mpc']:.2f} m at 1.2 s steps): watch the status badges."
+        )
     return out

@@ -34,8 +34,12 @@ if TYPE_CHECKING:
 
 STATUS_HZ = 2.0  # status text refreshes per second while running
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
-PUSH_DIRECTIONS = {"left (+y)": (0.0, 1.0), "right (-y)": (0.0, -1.0),
-                   "forward (+x)": (1.0, 0.0), "backward (-x)": (-1.0, 0.0)}
+PUSH_DIRECTIONS = {
+    "left (+y)": (0.0, 1.0),
+    "right (-y)": (0.0, -1.0),
+    "forward (+x)": (1.0, 0.0),
+    "backward (-x)": (-1.0, 0.0),
+}
 
 
 def _label(meta: dict[str, Any]) -> str:
@@ -44,8 +48,11 @@ def _label(meta: dict[str, Any]) -> str:
 
 
 def _hint(meta: dict[str, Any]) -> str:
-    when = ("from the next step (the footsteps are re-planned)" if meta.get("applies") == "step"
-            else "on the next tick")
+    when = (
+        "from the next step (the footsteps are re-planned)"
+        if meta.get("applies") == "step"
+        else "on the next tick"
+    )
     extra = f"; {meta['help']}" if meta.get("help") else ""
     paper = f"; paper: {meta['paper']:g}" if meta.get("paper") is not None else ""
     return f"Acts {when}{paper}{extra}."
@@ -64,8 +71,13 @@ class ControlPanel:
         self.method_boxes: dict[str, Any] = {}
         self._message: str | None = None  # a one-off message in the status area
         self._status_time = -math.inf
-        gui.configure_theme(control_layout="fixed", control_width="large", dark_mode=False,
-                            show_logo=False, show_share_button=False)
+        gui.configure_theme(
+            control_layout="fixed",
+            control_width="large",
+            dark_mode=False,
+            show_logo=False,
+            show_share_button=False,
+        )
         self.notice = gui.add_markdown(view.notice or "")
         self.notice.visible = bool(view.notice)
         self.status = gui.add_markdown("starting...")
@@ -95,20 +107,24 @@ class ControlPanel:
             self.pause_button.on_click(lambda _e: self._toggle_pause())
             row = gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
             row.on_click(lambda e: self._step(e.target.value))
-            self.timeline = gui.add_slider("Timeline [s] (paused)", 0.0, 1.0, 0.005, 1.0,
-                                           disabled=True)
+            self.timeline = gui.add_slider(
+                "Timeline [s] (paused)", 0.0, 1.0, 0.005, 1.0, disabled=True
+            )
             self.timeline.on_update(lambda _e: self._seek())
-            self.speed = gui.add_slider("Speed [x real time]", SPEED_MIN, SPEED_MAX, 0.1,
-                                        intent.speed)
+            self.speed = gui.add_slider(
+                "Speed [x real time]", SPEED_MIN, SPEED_MAX, 0.1, intent.speed
+            )
             self.speed.on_update(lambda _e: self._speed_changed())
             reset = gui.add_button("Restart all robots together", icon=viser.Icon.REFRESH)
             reset.on_click(lambda _e: self.session.reset())
         with gui.add_folder("View"):
             cams = gui.add_button_group("Camera", tuple(CAMERA_VIEWS))
             cams.on_click(lambda e: self.view.scene.set_camera(e.target.value, e.client))
-            sticks = gui.add_checkbox("Stick diagram of the last step (Fig. 11)", False,
-                                      hint="hips and legs at lift-off (grey) and landing "
-                                      "(black) of the last step")
+            sticks = gui.add_checkbox(
+                "Stick diagram of the last step (Fig. 11)",
+                False,
+                hint="hips and legs at lift-off (grey) and landing (black) of the last step",
+            )
             sticks.on_update(lambda _e: self.view.scene.set_sticks(sticks.value))
             gui.add_html(legend_html())
         with gui.add_folder("Compare"):
@@ -125,18 +141,21 @@ class ControlPanel:
             with gui.add_folder(GROUP_TITLES[group], expand_by_default=group == "walk"):
                 for name, meta in meta_all.items():
                     if meta.get("gui", True):
-                        self._add_param(group, name, meta,
-                                        getattr(getattr(intent.params, group), name))
+                        self._add_param(
+                            group, name, meta, getattr(getattr(intent.params, group), name)
+                        )
         with gui.add_folder("Push a robot", expand_by_default=False):
             gui.add_markdown(
                 "A horizontal push on the torso. The CoM MPC re-plans from the measured state "
                 "at the next tick; **nothing moves the footsteps**, so a push must be absorbed "
                 "within the planned footholds: a strong one makes the robot fall (it gets up "
-                "after 2 s).")
+                "after 2 s)."
+            )
             self.push_robot = gui.add_dropdown("Robot", intent.methods)
             self.push_force = gui.add_slider("Force [N]", 10.0, PUSH_FORCE_MAX, 10.0, 60.0)
-            self.push_dir = gui.add_dropdown("Direction", tuple(PUSH_DIRECTIONS),
-                                             initial_value="left (+y)")
+            self.push_dir = gui.add_dropdown(
+                "Direction", tuple(PUSH_DIRECTIONS), initial_value="left (+y)"
+            )
             self.push_time = gui.add_slider("Duration [s]", 0.05, PUSH_DURATION_MAX, 0.05, 0.1)
             go = gui.add_button("Push", icon=viser.Icon.HAND_STOP)
             go.on_click(lambda _e: self._push())
@@ -152,8 +171,9 @@ class ControlPanel:
         label = _label(meta)
         log = bool(meta.get("log"))
         if meta.get("choices"):
-            handle = gui.add_dropdown(label, tuple(meta["choices"]), initial_value=value,
-                                      hint=_hint(meta))
+            handle = gui.add_dropdown(
+                label, tuple(meta["choices"]), initial_value=value, hint=_hint(meta)
+            )
         elif meta["type"] == "bool":
             handle = gui.add_checkbox(label, bool(value), hint=_hint(meta))
         elif log:
@@ -161,18 +181,22 @@ class ControlPanel:
             marks = [(round(x), f"1e{round(x)}") for x in (lo, hi)]
             if meta.get("paper"):
                 marks.append((math.log10(meta["paper"]), "paper"))
-            handle = gui.add_slider(f"{meta['label']}, log10", lo, hi, 0.1,
-                                    self._to_slider(value, meta), marks=tuple(marks),
-                                    hint=_hint(meta))
+            handle = gui.add_slider(
+                f"{meta['label']}, log10",
+                lo,
+                hi,
+                0.1,
+                self._to_slider(value, meta),
+                marks=tuple(marks),
+                hint=_hint(meta),
+            )
         else:
             lo, hi, step = meta["min"], meta["max"], meta["step"]
             marks = ((meta["paper"], "paper"),) if meta.get("paper") is not None else None
             if (hi - lo) / step <= MAX_SLIDER_POSITIONS:
-                handle = gui.add_slider(label, lo, hi, step, value, marks=marks,
-                                        hint=_hint(meta))
+                handle = gui.add_slider(label, lo, hi, step, value, marks=marks, hint=_hint(meta))
             else:
-                handle = gui.add_number(label, value, min=lo, max=hi, step=step,
-                                        hint=_hint(meta))
+                handle = gui.add_number(label, value, min=lo, max=hi, step=step, hint=_hint(meta))
         handle.on_update(lambda _e, g=group, n=name: self._param_changed(g, n))
         self.controls[(group, name)] = (handle, log)
 
@@ -183,16 +207,21 @@ class ControlPanel:
     def _build_learn(self) -> None:
         gui = self.gui
         with gui.add_folder("Explain"):
-            self.lesson_choice = gui.add_dropdown("Layer", tuple(EXPLAIN),
-                                                  initial_value=next(iter(EXPLAIN)))
+            self.lesson_choice = gui.add_dropdown(
+                "Layer", tuple(EXPLAIN), initial_value=next(iter(EXPLAIN))
+            )
             self.lesson = gui.add_markdown(EXPLAIN[self.lesson_choice.value])
             self.lesson_choice.on_update(
-                lambda _e: setattr(self.lesson, "content", EXPLAIN[self.lesson_choice.value]))
+                lambda _e: setattr(self.lesson, "content", EXPLAIN[self.lesson_choice.value])
+            )
         with gui.add_folder("Kinematic analysis (Fig. 1-2, eq. 1-5)"):
             self.theta_slider = gui.add_slider("Pelvic angle [deg]", 0.0, 45.0, 1.0, 0.0)
             self.analysis_view = gui.add_html(analysis_svg(0.0))
-            self.theta_slider.on_update(lambda _e: setattr(
-                self.analysis_view, "content", analysis_svg(self.theta_slider.value)))
+            self.theta_slider.on_update(
+                lambda _e: setattr(
+                    self.analysis_view, "content", analysis_svg(self.theta_slider.value)
+                )
+            )
 
     # -- callbacks (write intent only) -----------------------------------------------------
     def _say(self, message: str) -> None:
@@ -203,7 +232,7 @@ class ControlPanel:
         if self._guarded():
             return
         handle, log = self.controls[(group, name)]
-        value = 10.0 ** handle.value if log else handle.value
+        value = 10.0**handle.value if log else handle.value
         if log:
             value = float(f"{value:.3g}")
         if getattr(getattr(self.session.intent.params, group), name) == value:
@@ -253,8 +282,10 @@ class ControlPanel:
         except ValueError as exc:
             self._say(f"**Not pushed:** {html.escape(str(exc))}")
             return
-        self._message = (f"Pushed **{self.push_robot.value}** {self.push_dir.value} with "
-                         f"{f:.0f} N for {self.push_time.value:.2f} s.")
+        self._message = (
+            f"Pushed **{self.push_robot.value}** {self.push_dir.value} with "
+            f"{f:.0f} N for {self.push_time.value:.2f} s."
+        )
 
     def _layer_changed(self, key: str) -> None:
         self.view.scene.set_layer(key, self.layer_boxes[key].value)
@@ -288,8 +319,9 @@ class ControlPanel:
                 self.push_robot.options = intent.methods
                 self.speed.value = intent.speed
                 self.pause_button.label = "Resume" if intent.paused else "Pause"
-                self.pause_button.icon = (viser.Icon.PLAYER_PLAY if intent.paused
-                                          else viser.Icon.PLAYER_PAUSE)
+                self.pause_button.icon = (
+                    viser.Icon.PLAYER_PLAY if intent.paused else viser.Icon.PLAYER_PAUSE
+                )
                 self.timeline.disabled = not intent.paused
             finally:
                 self._local.reflecting = False
@@ -334,16 +366,24 @@ class ControlPanel:
 
     def _update_status(self, frame: LiveFrame, params: ControllerParams) -> None:
         rtf = frame.realtime_factor
-        head = (f"**Paused** at t = {frame.clock:.2f} s" if frame.paused
-                else f"Running at {frame.speed:g}x, real-time factor "
-                + (f"{rtf:.2f}" if rtf is not None else "-"))
+        head = (
+            f"**Paused** at t = {frame.clock:.2f} s"
+            if frame.paused
+            else f"Running at {frame.speed:g}x, real-time factor "
+            + (f"{rtf:.2f}" if rtf is not None else "-")
+        )
         lines = [head]
         for r in frame.robots:
             kappa = f"{r.kappa_legs:.0f}" if math.isfinite(r.kappa_legs) else "-"
-            state = ("standing by to start in phase" if r.waiting
-                     else f"step {max(r.step_index, 0)}, {r.step_length:.2f} m")
-            lines.append(f"**{METHOD_INFO[r.method].title}**: {r.status}, kappa {kappa}, "
-                         f"{state}, falls {r.falls}")
+            state = (
+                "standing by to start in phase"
+                if r.waiting
+                else f"step {max(r.step_index, 0)}, {r.step_length:.2f} m"
+            )
+            lines.append(
+                f"**{METHOD_INFO[r.method].title}**: {r.status}, kappa {kappa}, "
+                f"{state}, falls {r.falls}"
+            )
         lines += [f"⚠ {w}" for w in warnings_for(params)]
         extra = self.view.alerts()
         if self._message:

@@ -60,13 +60,15 @@ class LivePlots:
     def __init__(self, gui: Any, session: SessionView):
         self.gui = gui
         self.session = session
-        self.window = gui.add_dropdown("Window [s]", tuple(f"{w:g}" for w in WINDOWS_S),
-                                       initial_value=f"{WINDOWS_S[0]:g}")
+        self.window = gui.add_dropdown(
+            "Window [s]", tuple(f"{w:g}" for w in WINDOWS_S), initial_value=f"{WINDOWS_S[0]:g}"
+        )
         self.window.on_update(lambda _e: self._invalidate())
         self.note = gui.add_markdown(
             "Grey bands: double support, both feet down (a band starts at a landing and ends "
             "at the next lift-off). x: seconds before the instant shown (while paused and "
-            "sought, the plots end there).")
+            "sought, the plots end there)."
+        )
         self.folder = gui.add_folder("Plots", expand_by_default=True)
         self.handles: dict[str, Any] = {}
         self._scales: dict[str, tuple] = {}
@@ -105,13 +107,18 @@ class LivePlots:
             spec = next(p for p in PLOTS if p[0] == col)
             lo, hi = _span(ys, spec[2])
             band = np.where(dsp, hi, lo)  # filled down from the line: shaded in the DSP only
-            handle.data = (x.astype(np.float32), *(y.astype(np.float32) for y in ys),
-                           band.astype(np.float32))
+            handle.data = (
+                x.astype(np.float32),
+                *(y.astype(np.float32) for y in ys),
+                band.astype(np.float32),
+            )
             scales = (seconds, round(lo, 2), round(hi, 2))
             if self._scales.get(col) != scales:  # sent only when the ranges change
                 self._scales[col] = scales
-                handle.scales = {"x": viser.uplot.Scale(time=False, range=(-seconds, 0.0)),
-                                 "y": viser.uplot.Scale(range=(scales[1], scales[2]))}
+                handle.scales = {
+                    "x": viser.uplot.Scale(time=False, range=(-seconds, 0.0)),
+                    "y": viser.uplot.Scale(range=(scales[1], scales[2])),
+                }
 
     def _build(self, methods: tuple[str, ...]) -> None:
         for handle in self.handles.values():
@@ -119,16 +126,24 @@ class LivePlots:
         self.handles = {}
         series = (
             viser.uplot.Series(label="t - now [s]"),
-            *(viser.uplot.Series(label=METHOD_INFO[m].title, stroke=css(METHOD_INFO[m].color),
-                                 width=2) for m in methods),
-            viser.uplot.Series(label="double support", stroke="rgba(0,0,0,0)", fill=DSP_FILL,
-                               fillTo=-1e9, width=0),
+            *(
+                viser.uplot.Series(
+                    label=METHOD_INFO[m].title, stroke=css(METHOD_INFO[m].color), width=2
+                )
+                for m in methods
+            ),
+            viser.uplot.Series(
+                label="double support", stroke="rgba(0,0,0,0)", fill=DSP_FILL, fillTo=-1e9, width=0
+            ),
         )
         empty = tuple(np.zeros(2, dtype=np.float32) for _ in range(len(methods) + 2))
         with self.folder:
             for col, title, _span_min in PLOTS:
                 self.handles[col] = self.gui.add_uplot(
-                    data=empty, series=series, title=title, aspect=2.0,
+                    data=empty,
+                    series=series,
+                    title=title,
+                    aspect=2.0,
                     scales={"x": viser.uplot.Scale(time=False, range=(-WINDOWS_S[0], 0.0))},
                 )
         self._methods = methods
@@ -148,30 +163,41 @@ class HorizonInspector:
         x_axis = viser.uplot.Series(label="t from now [s]")
         empty = tuple(np.zeros(2, dtype=np.float32) for _ in range(5))
         self.com = gui.add_uplot(
-            data=empty, title="Predicted CoM and planned feet, x from the CoM now [m] (eq. 25-26, 20-21)",
-            series=(x_axis, viser.uplot.Series(label="CoM x", stroke="rgb(140,60,200)", width=2),
-                    viser.uplot.Series(label="left foot x", stroke=black, width=1.5),
-                    viser.uplot.Series(label="right foot x", stroke=grey, width=1.5,
-                                       dash=(6, 4)),
-                    viser.uplot.Series(label="CoM y", stroke="rgb(200,120,220)", width=1)),
-            aspect=2.0)
+            data=empty,
+            title="Predicted CoM and planned feet, x from the CoM now [m] (eq. 25-26, 20-21)",
+            series=(
+                x_axis,
+                viser.uplot.Series(label="CoM x", stroke="rgb(140,60,200)", width=2),
+                viser.uplot.Series(label="left foot x", stroke=black, width=1.5),
+                viser.uplot.Series(label="right foot x", stroke=grey, width=1.5, dash=(6, 4)),
+                viser.uplot.Series(label="CoM y", stroke="rgb(200,120,220)", width=1),
+            ),
+            aspect=2.0,
+        )
         self.zmp = gui.add_uplot(
             data=tuple(np.zeros(2, dtype=np.float32) for _ in range(5)),
             title="Predicted ZMP y with its reference and bounds [m] (eq. 16-18)",
-            series=(x_axis, viser.uplot.Series(label="ZMP y", stroke="rgb(200,30,60)", width=2),
-                    viser.uplot.Series(label="reference", stroke=black, width=1, dash=(6, 4)),
-                    viser.uplot.Series(label="min", stroke=grey, width=1),
-                    viser.uplot.Series(label="max", stroke=grey, width=1)),
-            aspect=2.0)
+            series=(
+                x_axis,
+                viser.uplot.Series(label="ZMP y", stroke="rgb(200,30,60)", width=2),
+                viser.uplot.Series(label="reference", stroke=black, width=1, dash=(6, 4)),
+                viser.uplot.Series(label="min", stroke=grey, width=1),
+                viser.uplot.Series(label="max", stroke=grey, width=1),
+            ),
+            aspect=2.0,
+        )
         self.theta = gui.add_uplot(
             data=tuple(np.zeros(2, dtype=np.float32) for _ in range(3)),
             title="Pelvic angle over the horizon [deg] (eq. 30-33, 35)",
-            series=(x_axis,
-                    viser.uplot.Series(label="theta_ref (eq. 33)", stroke=black, width=1.5,
-                                       dash=(6, 4)),
-                    viser.uplot.Series(label="theta (MPC, eq. 35)", stroke="rgb(200,30,60)",
-                                       width=2.5)),
-            aspect=2.0)
+            series=(
+                x_axis,
+                viser.uplot.Series(
+                    label="theta_ref (eq. 33)", stroke=black, width=1.5, dash=(6, 4)
+                ),
+                viser.uplot.Series(label="theta (MPC, eq. 35)", stroke="rgb(200,30,60)", width=2.5),
+            ),
+            aspect=2.0,
+        )
         self._key: tuple | None = None
         self._time = -math.inf
         self._scales: dict[str, tuple[float, float, float]] = {}
@@ -179,15 +205,23 @@ class HorizonInspector:
     def _invalidate(self) -> None:
         self._key = None
 
-    def _scale(self, handle: Any, name: str, horizon: float, ys: list[np.ndarray],
-               minimum: tuple[float, float]) -> None:
+    def _scale(
+        self,
+        handle: Any,
+        name: str,
+        horizon: float,
+        ys: list[np.ndarray],
+        minimum: tuple[float, float],
+    ) -> None:
         """Explicit x (seconds, not uPlot's default time axis) and y ranges, sent on change."""
         lo, hi = _span(ys, minimum)
         scales = (round(horizon, 3), round(lo, 2), round(hi, 2))
         if self._scales.get(name) != scales:
             self._scales[name] = scales
-            handle.scales = {"x": viser.uplot.Scale(time=False, range=(0.0, scales[0])),
-                             "y": viser.uplot.Scale(range=(scales[1], scales[2]))}
+            handle.scales = {
+                "x": viser.uplot.Scale(time=False, range=(0.0, scales[0])),
+                "y": viser.uplot.Scale(range=(scales[1], scales[2])),
+            }
 
     def update(self, frame: LiveFrame, now: float) -> None:
         methods = tuple(r.method for r in frame.robots)
@@ -199,8 +233,12 @@ class HorizonInspector:
         if r is None or r.horizon is None:
             return
         key = (frame.seq, r.method)
-        if key == self._key or (not frame.paused and now - self._time < 1.0 / INSPECTOR_HZ
-                                and self._key is not None and self._key[1] == r.method):
+        if key == self._key or (
+            not frame.paused
+            and now - self._time < 1.0 / INSPECTOR_HZ
+            and self._key is not None
+            and self._key[1] == r.method
+        ):
             return
         self._key, self._time = key, now
         h = r.horizon
@@ -208,21 +246,35 @@ class HorizonInspector:
         f32 = np.float32
         x0 = float(r.com[0])  # forward positions from the measured CoM now: readable numbers
         com_x, left_x, right_x = h.com[:, 0] - x0, h.left_foot[:, 0] - x0, h.right_foot[:, 0] - x0
-        self.com.data = (t, com_x.astype(f32), left_x.astype(f32), right_x.astype(f32),
-                         h.com[:, 1].astype(f32))
-        self.zmp.data = (t, h.zmp[:, 1].astype(f32), h.zmp_ref[:, 1].astype(f32),
-                         h.zmp_lo[:, 1].astype(f32), h.zmp_hi[:, 1].astype(f32))
+        self.com.data = (
+            t,
+            com_x.astype(f32),
+            left_x.astype(f32),
+            right_x.astype(f32),
+            h.com[:, 1].astype(f32),
+        )
+        self.zmp.data = (
+            t,
+            h.zmp[:, 1].astype(f32),
+            h.zmp_ref[:, 1].astype(f32),
+            h.zmp_lo[:, 1].astype(f32),
+            h.zmp_hi[:, 1].astype(f32),
+        )
         deg = 180.0 / np.pi
         theta_ref, theta = h.theta_ref * deg, h.theta * deg
         self.theta.data = (t, theta_ref.astype(f32), theta.astype(f32))
         horizon = float(h.t[-1])
-        self._scale(self.com, "com", horizon, [com_x, left_x, right_x, h.com[:, 1]],
-                    (-0.2, 0.6))
-        self._scale(self.zmp, "zmp", horizon, [h.zmp[:, 1], h.zmp_lo[:, 1], h.zmp_hi[:, 1]],
-                    (-0.15, 0.15))
+        self._scale(self.com, "com", horizon, [com_x, left_x, right_x, h.com[:, 1]], (-0.2, 0.6))
+        self._scale(
+            self.zmp, "zmp", horizon, [h.zmp[:, 1], h.zmp_lo[:, 1], h.zmp_hi[:, 1]], (-0.15, 0.15)
+        )
         self._scale(self.theta, "theta", horizon, [theta_ref, theta], (-10.0, 10.0))
-        phase = "double support" if r.in_dsp else ("single support" if r.step_index >= 0
-                                                     else "standing")
+        phase = (
+            "double support"
+            if r.in_dsp
+            else ("single support" if r.step_index >= 0 else "standing")
+        )
         self.caption.content = (
             f"**{METHOD_INFO[r.method].title}** at t = {frame.clock:.2f} s ({phase}, step "
-            f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples.")
+            f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples."
+        )

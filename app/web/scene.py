@@ -83,8 +83,9 @@ CAMERA_VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, fl
 VIEW_MARGIN = 0.9  # [m] around the outer robots (labels, footholds ahead and behind)
 
 
-def camera_pose(name: str, n: int, aspect: float, along_x: bool
-                ) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float], float]:
+def camera_pose(
+    name: str, n: int, aspect: float, along_x: bool
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float], float]:
     """(position, look_at, up, vertical fov [rad]) of a named view that shows ``n`` robots
     side by side (along x when ``along_x``) whole in a canvas of ``aspect`` = width/height."""
     direction, up, fov_deg = CAMERA_VIEWS[name]
@@ -94,8 +95,12 @@ def camera_pose(name: str, n: int, aspect: float, along_x: bool
     lo = np.array([-spread if along_x else -VIEW_MARGIN, -VIEW_MARGIN if along_x else -spread, 0])
     hi = np.array([spread if along_x else 1.2, VIEW_MARGIN if along_x else spread, top])
     centre = (lo + hi) / 2
-    corners = np.array([[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1])
-                        for z in (lo[2], hi[2])]) - centre
+    corners = (
+        np.array(
+            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        )
+        - centre
+    )
     u = np.asarray(up, float) - np.dot(up, d) * d
     u /= np.linalg.norm(u)
     right = np.cross(u, d)  # the camera looks along -d
@@ -149,18 +154,27 @@ def dashed(segments: np.ndarray, pieces: int = 4) -> np.ndarray:
 
 def legend_html() -> str:
     """The scene's colours, for the GUI."""
+
     def sw(rgb: tuple[int, int, int], text: str, dash: bool = False) -> str:
         style = f"border-top:3px dashed rgb{rgb}" if dash else f"background:rgb{rgb}"
-        return (f"<span style='display:inline-block;width:16px;height:{0 if dash else 10}px;"
-                f"{style};margin:0 4px 0 10px;vertical-align:middle'></span>{text}")
+        return (
+            f"<span style='display:inline-block;width:16px;height:{0 if dash else 10}px;"
+            f"{style};margin:0 4px 0 10px;vertical-align:middle'></span>{text}"
+        )
 
     robots = "".join(sw(i.color, i.title) for i in METHOD_INFO.values())
-    parts = [sw(PREDICTION, "predicted CoM and MPC hip line"), sw(PREDICTION, "theta_ref",
-                                                                       dash=True),
-             sw(ZMP_REF, "ZMP reference"), sw(ZMP_MEAS, "measured ZMP (CoP)"),
-             sw(GROUND, "footholds"), sw((240, 0, 0), "leg nearly straight")]
-    return (f"<div style='font-size:12px;line-height:1.8'>Robots (torso): {robots}<br>"
-            f"{''.join(parts)}</div>")
+    parts = [
+        sw(PREDICTION, "predicted CoM and MPC hip line"),
+        sw(PREDICTION, "theta_ref", dash=True),
+        sw(ZMP_REF, "ZMP reference"),
+        sw(ZMP_MEAS, "measured ZMP (CoP)"),
+        sw(GROUND, "footholds"),
+        sw((240, 0, 0), "leg nearly straight"),
+    ]
+    return (
+        f"<div style='font-size:12px;line-height:1.8'>Robots (torso): {robots}<br>"
+        f"{''.join(parts)}</div>"
+    )
 
 
 class RobotMeshes:
@@ -187,28 +201,33 @@ class RobotMeshes:
                 rgb = tuple(int(255 * c) for c in model.geom_rgba[g, :3])
                 for end in (model.geom_pos[g] + axis, model.geom_pos[g] - axis):
                     groups.setdefault(("sphere",), []).append(
-                        (body, end, model.geom_quat[g].copy(), (size[0],) * 3, rgb, g in tinted))
+                        (body, end, model.geom_quat[g].copy(), (size[0],) * 3, rgb, g in tinted)
+                    )
                 key, scale = ("cylinder",), (size[0], size[0], size[1])
             else:
                 continue
             rgb = tuple(int(255 * c) for c in model.geom_rgba[g, :3])
             groups.setdefault(key, []).append(
-                (body, model.geom_pos[g].copy(), model.geom_quat[g].copy(), scale, rgb,
-                 g in tinted))
+                (body, model.geom_pos[g].copy(), model.geom_quat[g].copy(), scale, rgb, g in tinted)
+            )
         self.kinds = {}
-        units = {"box": lambda: trimesh.creation.box(extents=(2.0, 2.0, 2.0)),
-                 "cylinder": lambda: trimesh.creation.cylinder(radius=1.0, height=2.0,
-                                                               sections=16),
-                 "sphere": lambda: trimesh.creation.icosphere(subdivisions=2)}
+        units = {
+            "box": lambda: trimesh.creation.box(extents=(2.0, 2.0, 2.0)),
+            "cylinder": lambda: trimesh.creation.cylinder(radius=1.0, height=2.0, sections=16),
+            "sphere": lambda: trimesh.creation.icosphere(subdivisions=2),
+        }
         for key, rows in groups.items():
             mesh = units[key[0]]()
             name = "_".join(str(k).replace(".", "p") for k in key)
-            self.kinds[name] = (mesh, np.array([r[0] for r in rows]),
-                                np.array([r[1] for r in rows]),
-                                vtf.SO3(np.array([r[2] for r in rows])).as_matrix(),
-                                np.array([r[3] for r in rows], np.float32),
-                                np.array([r[4] for r in rows], np.uint8),
-                                np.array([r[5] for r in rows], bool))
+            self.kinds[name] = (
+                mesh,
+                np.array([r[0] for r in rows]),
+                np.array([r[1] for r in rows]),
+                vtf.SO3(np.array([r[2] for r in rows])).as_matrix(),
+                np.array([r[3] for r in rows], np.float32),
+                np.array([r[4] for r in rows], np.uint8),
+                np.array([r[5] for r in rows], bool),
+            )
         self.handles: dict[str, Any] = {}
         self._methods: tuple[str, ...] = ()
 
@@ -219,14 +238,19 @@ class RobotMeshes:
         self.handles = {}
         n = len(methods)
         for kind, (mesh, body, _p, _R, scale, rgb, tint) in self.kinds.items():
-            colors = np.concatenate([np.where(tint[:, None], METHOD_INFO[m].color, rgb)
-                                     for m in methods]).astype(np.uint8)
+            colors = np.concatenate(
+                [np.where(tint[:, None], METHOD_INFO[m].color, rgb) for m in methods]
+            ).astype(np.uint8)
             k = len(body) * n
             self.handles[kind] = self.scene.add_batched_meshes_simple(
-                f"{self.parent}/robot_{kind}", mesh.vertices, mesh.faces,
+                f"{self.parent}/robot_{kind}",
+                mesh.vertices,
+                mesh.faces,
                 batched_wxyzs=np.tile([1.0, 0, 0, 0], (k, 1)).astype(np.float32),
                 batched_positions=np.zeros((k, 3), np.float32),
-                batched_scales=np.tile(scale, (n, 1)), batched_colors=colors, lod="off",
+                batched_scales=np.tile(scale, (n, 1)),
+                batched_colors=colors,
+                lod="off",
             )
         self._methods = methods
 
@@ -274,8 +298,7 @@ def _seg(parts: list[np.ndarray]) -> np.ndarray:
     return np.concatenate(parts).astype(np.float32) if parts else _EMPTY_SEG
 
 
-def _colored(parts: list[tuple[np.ndarray, tuple[int, int, int]]]) -> tuple[np.ndarray,
-                                                                               np.ndarray]:
+def _colored(parts: list[tuple[np.ndarray, tuple[int, int, int]]]) -> tuple[np.ndarray, np.ndarray]:
     """Segments and per-segment colours from (segments, colour) pairs."""
     parts = [(s, c) for s, c in parts if len(s)]
     if not parts:
@@ -324,8 +347,11 @@ def stick_segments(kept: FrameStore, r: RobotFrame) -> np.ndarray | None:
                 break
         if found is None:
             return None
-        out += [[found.hips[0], found.ankles[0]], [found.hips[1], found.ankles[1]],
-                [found.hips[0], found.hips[1]]]
+        out += [
+            [found.hips[0], found.ankles[0]],
+            [found.hips[1], found.ankles[1]],
+            [found.hips[0], found.hips[1]],
+        ]
     return np.array(out)
 
 
@@ -341,22 +367,53 @@ class SceneView:
         self._follow_x = 0.0
         sc.set_up_direction("+z")
         self.world = sc.add_frame("/world", show_axes=False)
-        sc.add_grid("/world/floor", width=60.0, height=8.0, cell_size=0.25, section_size=1.0,
-                    position=(20.0, 0.0, 0.0), plane_color=(250, 250, 250), plane_opacity=1.0,
-                    shadow_opacity=0.2)
+        sc.add_grid(
+            "/world/floor",
+            width=60.0,
+            height=8.0,
+            cell_size=0.25,
+            section_size=1.0,
+            position=(20.0, 0.0, 0.0),
+            plane_color=(250, 250, 250),
+            plane_opacity=1.0,
+            shadow_opacity=0.2,
+        )
         self.robots = RobotMeshes(sc, model, "/world")
         seg, grey = _EMPTY_SEG, (120, 120, 120)
-        lines = {"footholds": (GROUND, 2.0), "support": (SUPPORT, 2.5), "swing": (GROUND, 1.5),
-                 "prediction": (PREDICTION, 3.0), "reach": (grey, 6.0), "sticks": (grey, 3.0)}
-        self.ov = {k: _Overlay(sc.add_line_segments(f"/world/{k}", seg, c, thickness=t,
-                                                    thickness_units="screen"))
-                   for k, (c, t) in lines.items()}
-        self.ov["zmp"] = _Overlay(sc.add_point_cloud(
-            "/world/zmp", np.zeros((1, 3), np.float32), ZMP_REF, point_size=0.05,
-            point_shape="circle", precision="float32"))
-        self.ov["momentum"] = _Overlay(sc.add_arrows(
-            "/world/momentum", np.zeros((1, 2, 3), np.float32), MOMENTUM, shaft_radius=0.015,
-            head_radius=0.04, head_length=0.08))
+        lines = {
+            "footholds": (GROUND, 2.0),
+            "support": (SUPPORT, 2.5),
+            "swing": (GROUND, 1.5),
+            "prediction": (PREDICTION, 3.0),
+            "reach": (grey, 6.0),
+            "sticks": (grey, 3.0),
+        }
+        self.ov = {
+            k: _Overlay(
+                sc.add_line_segments(f"/world/{k}", seg, c, thickness=t, thickness_units="screen")
+            )
+            for k, (c, t) in lines.items()
+        }
+        self.ov["zmp"] = _Overlay(
+            sc.add_point_cloud(
+                "/world/zmp",
+                np.zeros((1, 3), np.float32),
+                ZMP_REF,
+                point_size=0.05,
+                point_shape="circle",
+                precision="float32",
+            )
+        )
+        self.ov["momentum"] = _Overlay(
+            sc.add_arrows(
+                "/world/momentum",
+                np.zeros((1, 2, 3), np.float32),
+                MOMENTUM,
+                shaft_radius=0.015,
+                head_radius=0.04,
+                head_length=0.08,
+            )
+        )
         self.ov["sticks"].handle.visible = False
         self.labels: list[_Overlay] = []
         self._methods: tuple[str, ...] = ()
@@ -414,10 +471,18 @@ class SceneView:
         self.robots.layout(methods)
         for label in self.labels:
             label.handle.remove()
-        self.labels = [_Overlay(self.scene.add_label(
-            f"/world/label_{i}", METHOD_INFO[m].title, font_screen_scale=1.1,
-            anchor="bottom-center", visible=self.layers["labels"]))
-            for i, m in enumerate(methods)]
+        self.labels = [
+            _Overlay(
+                self.scene.add_label(
+                    f"/world/label_{i}",
+                    METHOD_INFO[m].title,
+                    font_screen_scale=1.1,
+                    anchor="bottom-center",
+                    visible=self.layers["labels"],
+                )
+            )
+            for i, m in enumerate(methods)
+        ]
         self._methods = methods
         self._keys.clear()
         self._apply_layers()
@@ -432,8 +497,12 @@ class SceneView:
             return
         robots = frame.robots
         n = len(robots)
-        y = np.array([(slot_offset(i, n), 0.0) if self.along_x else (0.0, slot_offset(i, n))
-                      for i in range(n)])  # (n, 2) each robot's offset in x, y
+        y = np.array(
+            [
+                (slot_offset(i, n), 0.0) if self.along_x else (0.0, slot_offset(i, n))
+                for i in range(n)
+            ]
+        )  # (n, 2) each robot's offset in x, y
         target = float(np.mean([r.com[0] for r in robots])) if self.follow else 0.0
         jump = abs(target - self._follow_x) > 2.0 or frame.paused
         self._follow_x = target if jump else self._follow_x + 0.25 * (target - self._follow_x)
@@ -452,11 +521,14 @@ class SceneView:
                 for r, yi, label in zip(robots, y, self.labels, strict=True):
                     # staggered heights: labels never overlap, whatever the camera
                     z = 2.05 + 0.3 * (len(robots) - 1 - r.slot)
-                    label.set(text=_label_text(r),
-                              position=np.array([r.com[0] + yi[0], yi[1], z], np.float32))
+                    label.set(
+                        text=_label_text(r),
+                        position=np.array([r.com[0] + yi[0], yi[1], z], np.float32),
+                    )
 
-    def _draw_overlays(self, robots: tuple[RobotFrame, ...], y: np.ndarray,
-                       kept: FrameStore | None) -> None:
+    def _draw_overlays(
+        self, robots: tuple[RobotFrame, ...], y: np.ndarray, kept: FrameStore | None
+    ) -> None:
         on, ov = self.layers, self.ov
         if on["footholds"]:
             key = tuple((id(r.plan), round(r.com[0] / FOOTHOLD_WINDOW)) for r in robots)
@@ -466,18 +538,31 @@ class SceneView:
                 for r, yi in zip(robots, y, strict=True):
                     holds = r.plan.footholds()
                     near = np.abs(holds[:, 0] - r.com[0]) < FOOTHOLD_WINDOW
-                    parts.append(rectangle_segments(holds[near, :2] + yi, FOOT_SIZE,
-                                                    FLOOR_Z))
+                    parts.append(rectangle_segments(holds[near, :2] + yi, FOOT_SIZE, FLOOR_Z))
                 ov["footholds"].set(points=_seg(parts))
         if on["support"]:
-            ov["support"].set(points=_seg([
-                polyline_segments(np.column_stack([r.support + yi,
-                                                   np.full(len(r.support), FLOOR_Z)]),
-                                  closed=True) for r, yi in zip(robots, y, strict=True)
-                if len(r.support) >= 3]))
+            ov["support"].set(
+                points=_seg(
+                    [
+                        polyline_segments(
+                            np.column_stack([r.support + yi, np.full(len(r.support), FLOOR_Z)]),
+                            closed=True,
+                        )
+                        for r, yi in zip(robots, y, strict=True)
+                        if len(r.support) >= 3
+                    ]
+                )
+            )
         if on["prediction"]:
-            ov["prediction"].set(points=_seg([seg for r, yi in zip(robots, y, strict=True)
-                                              for seg in _robot_prediction(r, yi)]))
+            ov["prediction"].set(
+                points=_seg(
+                    [
+                        seg
+                        for r, yi in zip(robots, y, strict=True)
+                        for seg in _robot_prediction(r, yi)
+                    ]
+                )
+            )
         if on["zmp"]:
             pts, cols = [], []
             for r, yi in zip(robots, y, strict=True):
@@ -488,11 +573,11 @@ class SceneView:
                     pts.append((*(r.cop + yi), FLOOR_Z + 0.02))
                     cols.append(ZMP_MEAS)
             if pts:
-                ov["zmp"].set(points=np.array(pts, np.float32),
-                              colors=np.array(cols, np.uint8))
+                ov["zmp"].set(points=np.array(pts, np.float32), colors=np.array(cols, np.uint8))
         if on["swing"]:
-            ov["swing"].set(points=_seg([_swing_path(r, yi)
-                                         for r, yi in zip(robots, y, strict=True)]))
+            ov["swing"].set(
+                points=_seg([_swing_path(r, yi) for r, yi in zip(robots, y, strict=True)])
+            )
         if on["momentum"]:
             arrows = []
             for r, yi in zip(robots, y, strict=True):
@@ -501,11 +586,16 @@ class SceneView:
                 arrows.append([base, base + (0.0, 0.0, length if abs(length) > 0.01 else 0.01)])
             ov["momentum"].set(points=np.array(arrows, np.float32))
         if on["reach"]:
-            legs = np.concatenate([np.stack([r.hips, r.ankles], axis=1) + (*yi, 0.0)
-                                   for r, yi in zip(robots, y, strict=True)])
+            legs = np.concatenate(
+                [
+                    np.stack([r.hips, r.ankles], axis=1) + (*yi, 0.0)
+                    for r, yi in zip(robots, y, strict=True)
+                ]
+            )
             colors = np.array([reach_color(v) for r in robots for v in r.reach], np.uint8)
-            ov["reach"].set(points=legs.astype(np.float32),
-                            colors=np.repeat(colors[:, None, :], 2, axis=1))
+            ov["reach"].set(
+                points=legs.astype(np.float32), colors=np.repeat(colors[:, None, :], 2, axis=1)
+            )
         if self.sticks and kept is not None:
             key = tuple((id(r.plan), r.step_index) for r in robots)
             if self._keys.get("sticks") != key:
@@ -537,6 +627,8 @@ def _label_text(r: RobotFrame) -> str:
     head = METHOD_INFO[r.method].title
     if r.waiting:
         return f"{head}\nstanding by to start in phase"
-    return (f"{head} · {r.status}\nstep {max(r.step_index, 0)} · {r.step_length:.2f} m · "
-            f"waist {math.degrees(r.waist_angle):+.0f}°\nreach left {reach[0]:.2f} · right "
-            f"{reach[1]:.2f}")
+    return (
+        f"{head} · {r.status}\nstep {max(r.step_index, 0)} · {r.step_length:.2f} m · "
+        f"waist {math.degrees(r.waist_angle):+.0f}°\nreach left {reach[0]:.2f} · right "
+        f"{reach[1]:.2f}"
+    )

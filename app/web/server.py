@@ -75,10 +75,17 @@ def serve(
     """
     import uvicorn
 
-    given = {"host": host, "port": port, "viser_port": viser_port, "report_dir": report_dir,
-             "workers": workers, "sessions": sessions,
-             "robots_per_worker": robots_per_worker, "display_hz": display_hz,
-             "idle_timeout": idle_timeout}
+    given = {
+        "host": host,
+        "port": port,
+        "viser_port": viser_port,
+        "report_dir": report_dir,
+        "workers": workers,
+        "sessions": sessions,
+        "robots_per_worker": robots_per_worker,
+        "display_hz": display_hz,
+        "idle_timeout": idle_timeout,
+    }
     try:  # the command line over the environment over the defaults, checked in one place
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
     except ValidationError as exc:
@@ -107,14 +114,18 @@ def serve(
     intent = initial_intent(methods=methods) if methods else initial_intent()
     registry = SessionRegistry.start(sessions, intent, pool, idle_timeout)
     display = Display(viser_server, registry, display_hz).start()
-    app = create_app(registry, viser_port=viser_port, report_dir=report_dir,
-                     health_extra=display.health)
+    app = create_app(
+        registry, viser_port=viser_port, report_dir=report_dir, health_extra=display.health
+    )
     config = uvicorn.Config(app, host=host, port=port, log_level="warning")
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host
-    print(f"pelvic-walk: open http://{shown}:{port}/  (3-D scene: http://{shown}:{viser_port}/,"
-          f" API docs: http://{shown}:{port}/docs); {workers} worker process"
-          f"{'es' if workers != 1 else ''}, {sessions} sessions; Ctrl-C to stop", flush=True)
+    print(
+        f"pelvic-walk: open http://{shown}:{port}/  (3-D scene: http://{shown}:{viser_port}/,"
+        f" API docs: http://{shown}:{port}/docs); {workers} worker process"
+        f"{'es' if workers != 1 else ''}, {sessions} sessions; Ctrl-C to stop",
+        flush=True,
+    )
     status = 0
     try:
         server.run()

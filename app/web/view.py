@@ -35,8 +35,13 @@ ALERT_S = 300.0  # [s] a worker's death is shown this long
 class View:
     """One scene and control panel (on the server, or on one browser) showing one session."""
 
-    def __init__(self, target: Any, session: SessionView, registry: SessionRegistry,
-                 notice: str | None = None):
+    def __init__(
+        self,
+        target: Any,
+        session: SessionView,
+        registry: SessionRegistry,
+        notice: str | None = None,
+    ):
         self.target = target
         self.session = session
         self.registry = registry
@@ -59,8 +64,12 @@ class View:
         """Draw the shown frame if anything changed since the last draw."""
         session = self.session
         frame = session.shown_frame()
-        key = (frame.seq if frame else -1, session.intent.version, id(session),
-               len(self.registry.pool.deaths) if self.registry.pool else 0)
+        key = (
+            frame.seq if frame else -1,
+            session.intent.version,
+            id(session),
+            len(self.registry.pool.deaths) if self.registry.pool else 0,
+        )
         if key == self._drawn:
             return
         self._drawn = key
@@ -99,8 +108,10 @@ class Display:
             self.refused += 1
             n = self.registry.count_private()
             session = self.registry.shared
-            notice = (f"**{n} private sessions run, as many as the workers hold**: you are "
-                      "watching the shared demo (your changes act on it too).")
+            notice = (
+                f"**{n} private sessions run, as many as the workers hold**: you are "
+                "watching the shared demo (your changes act on it too)."
+            )
         try:
             view = View(client, session, self.registry, notice)
         except Exception:  # noqa: BLE001 - a browser that left while its view was built
@@ -142,5 +153,9 @@ class Display:
     def health(self) -> dict[str, Any]:
         with self._lock:
             n = len(self.views)
-        return {"display_hz": self.hz, "views": n, "viewers_refused": self.refused,
-                "display_running": self._thread is not None and self._thread.is_alive()}
+        return {
+            "display_hz": self.hz,
+            "views": n,
+            "viewers_refused": self.refused,
+            "display_running": self._thread is not None and self._thread.is_alive(),
+        }

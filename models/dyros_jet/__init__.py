@@ -19,12 +19,26 @@ ROOT_JOINT = "root"
 
 LOWER_JOINTS = (
     "waist_yaw",
-    "L_hip_yaw", "L_hip_roll", "L_hip_pitch", "L_knee", "L_ankle_pitch", "L_ankle_roll",
-    "R_hip_yaw", "R_hip_roll", "R_hip_pitch", "R_knee", "R_ankle_pitch", "R_ankle_roll",
+    "L_hip_yaw",
+    "L_hip_roll",
+    "L_hip_pitch",
+    "L_knee",
+    "L_ankle_pitch",
+    "L_ankle_roll",
+    "R_hip_yaw",
+    "R_hip_roll",
+    "R_hip_pitch",
+    "R_knee",
+    "R_ankle_pitch",
+    "R_ankle_roll",
 )
 ARM_JOINTS = (
-    "L_shoulder_pitch", "L_shoulder_roll", "L_elbow",
-    "R_shoulder_pitch", "R_shoulder_roll", "R_elbow",
+    "L_shoulder_pitch",
+    "L_shoulder_roll",
+    "L_elbow",
+    "R_shoulder_pitch",
+    "R_shoulder_roll",
+    "R_elbow",
 )
 ARM_QP_JOINTS = ("L_shoulder_pitch", "L_elbow", "R_shoulder_pitch", "R_elbow")
 JOINTS = LOWER_JOINTS + ARM_JOINTS  # qpos[7:] / ctrl order (19)

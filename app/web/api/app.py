@@ -91,9 +91,14 @@ def create_app(
 
     by_header, by_path = resolvers(registry)
     reports = (lambda: report_dir) if report_dir is not None else latest_report_dir
-    for r in (health, session_router("/api", by_header), sessions_router(registry),
-              session_router("/api/sessions/{sid}", by_path), runs_router(runs),
-              pages_router(app, viser_port, reports)):
+    for r in (
+        health,
+        session_router("/api", by_header),
+        sessions_router(registry),
+        session_router("/api/sessions/{sid}", by_path),
+        runs_router(runs),
+        pages_router(app, viser_port, reports),
+    ):
         app.include_router(r)
     mount_docs_assets(app)
     return app

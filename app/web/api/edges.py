@@ -76,8 +76,14 @@ def _is_json(content_type: str | None) -> bool:
 
 def _invalid_json(reason: str) -> RequestValidationError:
     return RequestValidationError(
-        [{"type": "json_invalid", "loc": ("body",), "msg": f"body is not valid JSON: {reason}",
-          "input": None}]
+        [
+            {
+                "type": "json_invalid",
+                "loc": ("body",),
+                "msg": f"body is not valid JSON: {reason}",
+                "input": None,
+            }
+        ]
     )
 
 

@@ -43,24 +43,51 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
     """``GET /api/state``: the shown frame of every robot, the clock and what is kept."""
     frame = _shown(session)
     span = session.frames.span()
-    robots = [{
-        "method": r.method, "t": r.t, "step_index": r.step_index, "in_dsp": r.in_dsp,
-        "step_length": r.step_length, "status": r.status, "fell": r.fell,
-        "fall_reason": r.fall_reason, "waiting": r.waiting, "success": r.last_walk_success,
-        "walks_completed": r.walks_completed, "falls": r.falls,
-        "waist_angle_deg": math.degrees(r.waist_angle), "kappa": r.kappa,
-        "yaw_momentum": r.yaw_momentum, "reach": r.reach,
-        "zmp_ref": r.zmp_ref, "zmp_measured": r.cop, "pushing": r.pushing,
-        "solver_failures": r.solver_failures, "params": dict(vars(r.params.walk)),
-    } for r in frame.robots]
-    return finite({
-        "session": sid, "seq": frame.seq, "clock": frame.clock, "shown_t": session.shown_clock,
-        "kept": {"start": span[0] if span else None, "end": span[1] if span else None,
-                 "frames": len(session.frames),
-                 "megabytes": round(session.frames.nbytes() / 1e6, 2)},
-        "paused": frame.paused, "speed": frame.speed, "realtime_factor": frame.realtime_factor,
-        "compute_realtime_factor": frame.compute_realtime_factor, "robots": robots,
-    })
+    robots = [
+        {
+            "method": r.method,
+            "t": r.t,
+            "step_index": r.step_index,
+            "in_dsp": r.in_dsp,
+            "step_length": r.step_length,
+            "status": r.status,
+            "fell": r.fell,
+            "fall_reason": r.fall_reason,
+            "waiting": r.waiting,
+            "success": r.last_walk_success,
+            "walks_completed": r.walks_completed,
+            "falls": r.falls,
+            "waist_angle_deg": math.degrees(r.waist_angle),
+            "kappa": r.kappa,
+            "yaw_momentum": r.yaw_momentum,
+            "reach": r.reach,
+            "zmp_ref": r.zmp_ref,
+            "zmp_measured": r.cop,
+            "pushing": r.pushing,
+            "solver_failures": r.solver_failures,
+            "params": dict(vars(r.params.walk)),
+        }
+        for r in frame.robots
+    ]
+    return finite(
+        {
+            "session": sid,
+            "seq": frame.seq,
+            "clock": frame.clock,
+            "shown_t": session.shown_clock,
+            "kept": {
+                "start": span[0] if span else None,
+                "end": span[1] if span else None,
+                "frames": len(session.frames),
+                "megabytes": round(session.frames.nbytes() / 1e6, 2),
+            },
+            "paused": frame.paused,
+            "speed": frame.speed,
+            "realtime_factor": frame.realtime_factor,
+            "compute_realtime_factor": frame.compute_realtime_factor,
+            "robots": robots,
+        }
+    )
 
 
 def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
@@ -74,16 +101,30 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
     if h is None:
         raise conflict("the robot has not ticked since it (re)started: resume or step first")
     deg = 180.0 / math.pi
-    return finite({
-        "session": sid, "method": robot.method, "clock": frame.clock, "t": h.t,
-        "com_x": h.com[:, 0], "com_y": h.com[:, 1], "zmp_x": h.zmp[:, 0], "zmp_y": h.zmp[:, 1],
-        "zmp_ref_x": h.zmp_ref[:, 0], "zmp_ref_y": h.zmp_ref[:, 1],
-        "zmp_min_x": h.zmp_lo[:, 0], "zmp_max_x": h.zmp_hi[:, 0],
-        "zmp_min_y": h.zmp_lo[:, 1], "zmp_max_y": h.zmp_hi[:, 1],
-        "left_foot_x": h.left_foot[:, 0], "left_foot_y": h.left_foot[:, 1],
-        "right_foot_x": h.right_foot[:, 0], "right_foot_y": h.right_foot[:, 1],
-        "theta_ref_deg": h.theta_ref * deg, "theta_deg": h.theta * deg,
-    })
+    return finite(
+        {
+            "session": sid,
+            "method": robot.method,
+            "clock": frame.clock,
+            "t": h.t,
+            "com_x": h.com[:, 0],
+            "com_y": h.com[:, 1],
+            "zmp_x": h.zmp[:, 0],
+            "zmp_y": h.zmp[:, 1],
+            "zmp_ref_x": h.zmp_ref[:, 0],
+            "zmp_ref_y": h.zmp_ref[:, 1],
+            "zmp_min_x": h.zmp_lo[:, 0],
+            "zmp_max_x": h.zmp_hi[:, 0],
+            "zmp_min_y": h.zmp_lo[:, 1],
+            "zmp_max_y": h.zmp_hi[:, 1],
+            "left_foot_x": h.left_foot[:, 0],
+            "left_foot_y": h.left_foot[:, 1],
+            "right_foot_x": h.right_foot[:, 0],
+            "right_foot_y": h.right_foot[:, 1],
+            "theta_ref_deg": h.theta_ref * deg,
+            "theta_deg": h.theta * deg,
+        }
+    )
 
 
 def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]]) -> APIRouter:
@@ -99,9 +140,13 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
             raise unprocessable(str(exc)) from None
         frame = session.wait_applied(ticket, APPLY_TIMEOUT_S)
         intent = session.intent
-        return {"paused": intent.paused, "speed": intent.speed, "applied": frame is not None,
-                "t": [x.t for x in frame.robots] if frame else None,
-                "clock": frame.clock if frame else None}
+        return {
+            "paused": intent.paused,
+            "speed": intent.speed,
+            "applied": frame is not None,
+            "t": [x.t for x in frame.robots] if frame else None,
+            "clock": frame.clock if frame else None,
+        }
 
     @r.get("/params", response_model=ParamsModel, tags=["params"])
     def get_params(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
@@ -109,8 +154,10 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
         return params_dict(intent.params, intent.methods)
 
     @r.put("/params", response_model=ParamsModel, tags=["params"])
-    def put_params(body: ParamsUpdate,  # type: ignore[valid-type]
-                   s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def put_params(
+        body: ParamsUpdate,  # type: ignore[valid-type]
+        s: tuple[str, SessionView] = Session,
+    ) -> dict[str, Any]:
         """Change some parameters (others keep their value): gains act on the next tick,
         walking parameters from the next step."""
         session = s[1]
@@ -140,8 +187,9 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
         return _playback(s[1], s[1].reset)
 
     @r.post("/sim/step", tags=["playback"])
-    def step(body: StepRequest | None = None,
-             s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def step(
+        body: StepRequest | None = None, s: tuple[str, SessionView] = Session
+    ) -> dict[str, Any]:
         """Pause and advance one control period (5 ms), or to the next lift-off or landing
         (``{"until": "liftoff"}``) of the first walking robot."""
         until = body.until if body is not None else "tick"
@@ -176,9 +224,12 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
         return state_of(*s)
 
     @r.get("/horizon", response_model=HorizonResponse, tags=["state"])
-    def get_horizon(method: str | None = Query(None, description="fixed, redundancy or mpc "
-                                               "(default: mpc if shown, else the first)"),
-                    s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def get_horizon(
+        method: str | None = Query(
+            None, description="fixed, redundancy or mpc (default: mpc if shown, else the first)"
+        ),
+        s: tuple[str, SessionView] = Session,
+    ) -> dict[str, Any]:
         """The robot's plan over the horizon at the shown instant (Fig. 5-7): predicted CoM
         and ZMP, ZMP reference and bounds, planned feet, reference and optimised pelvic angle;
         lists of equal length, one per horizon sample."""

@@ -32,8 +32,14 @@ def _field(meta: dict[str, Any], required: bool) -> tuple[Any, Any]:
     typ = int if meta["type"] == "int" else float
     return (
         typ if required else typ | None,
-        Field(default, ge=meta.get("min"), le=meta.get("max"), strict=True,
-              allow_inf_nan=False, description=desc),
+        Field(
+            default,
+            ge=meta.get("min"),
+            le=meta.get("max"),
+            strict=True,
+            allow_inf_nan=False,
+            description=desc,
+        ),
     )
 
 
@@ -44,29 +50,44 @@ def _group_models() -> tuple[dict[str, type[BaseModel]], dict[str, type[BaseMode
     for group in GROUPS:
         meta = spec(getattr(defaults, group))
         cls_name = type(getattr(defaults, group)).__name__
-        full[group] = create_model(f"{cls_name}Model", __config__=STRICT,
-                                   **{k: _field(m, required=True) for k, m in meta.items()})
-        partial[group] = create_model(f"{cls_name}Update", __config__=STRICT,
-                                      **{k: _field(m, required=False) for k, m in meta.items()})
+        full[group] = create_model(
+            f"{cls_name}Model",
+            __config__=STRICT,
+            **{k: _field(m, required=True) for k, m in meta.items()},
+        )
+        partial[group] = create_model(
+            f"{cls_name}Update",
+            __config__=STRICT,
+            **{k: _field(m, required=False) for k, m in meta.items()},
+        )
     return full, partial
 
 
 GROUP_MODELS, GROUP_UPDATES = _group_models()
 ParamsModel = create_model(
-    "ParamsModel", __config__=STRICT,
+    "ParamsModel",
+    __config__=STRICT,
     **{g: (GROUP_MODELS[g], ...) for g in GROUPS},
     methods=(list[MethodName], Field(..., description="robots shown live, one per method")),
     control_dt=(float, Field(..., description="control period [s] (fixed)")),
 )
 ParamsUpdate = create_model(
-    "ParamsUpdate", __config__=STRICT,
+    "ParamsUpdate",
+    __config__=STRICT,
     **{g: (GROUP_UPDATES[g] | None, None) for g in GROUPS},
-    methods=(list[MethodName] | None,
-             Field(None, min_length=1, max_length=len(METHODS),
-                   description="methods to show live (fixed, redundancy, mpc)")),
+    methods=(
+        list[MethodName] | None,
+        Field(
+            None,
+            min_length=1,
+            max_length=len(METHODS),
+            description="methods to show live (fixed, redundancy, mpc)",
+        ),
+    ),
 )
 RunRequest = create_model(
-    "RunRequest", __config__=STRICT,
+    "RunRequest",
+    __config__=STRICT,
     method=(MethodName, Field("mpc", description="walking method")),
     seed=(int | None, Field(None, strict=True, description="seed of a small perturbation")),
     **{g: (GROUP_UPDATES[g] | None, None) for g in GROUPS},
@@ -75,8 +96,11 @@ RunRequest = create_model(
 
 def updates(body: BaseModel) -> dict[str, dict[str, Any]]:
     """The parameter groups a request changes (fields it leaves out keep their value)."""
-    return {g: getattr(body, g).model_dump(exclude_none=True)
-            for g in GROUPS if getattr(body, g) is not None}
+    return {
+        g: getattr(body, g).model_dump(exclude_none=True)
+        for g in GROUPS
+        if getattr(body, g) is not None
+    }
 
 
 def params_dict(params: ControllerParams, methods: tuple[str, ...]) -> dict[str, Any]:
@@ -88,30 +112,42 @@ def params_dict(params: ControllerParams, methods: tuple[str, ...]) -> dict[str,
 
 class SpeedRequest(BaseModel):
     model_config = STRICT
-    speed: float = Field(..., ge=SPEED_MIN, le=SPEED_MAX, strict=True, allow_inf_nan=False,
-                         description="playback speed [x real time]")
+    speed: float = Field(
+        ...,
+        ge=SPEED_MIN,
+        le=SPEED_MAX,
+        strict=True,
+        allow_inf_nan=False,
+        description="playback speed [x real time]",
+    )
 
 
 class StepRequest(BaseModel):
     model_config = STRICT
     until: Literal[STEP_UNTIL] = Field(  # type: ignore[valid-type]
-        "tick", description="advance one 5 ms tick, or to the next lift-off or landing")
+        "tick", description="advance one 5 ms tick, or to the next lift-off or landing"
+    )
 
 
 class SeekRequest(BaseModel):
     model_config = STRICT
-    t: float = Field(..., strict=True, allow_inf_nan=False,
-                     description="session clock [s] to show (the nearest kept instant)")
+    t: float = Field(
+        ...,
+        strict=True,
+        allow_inf_nan=False,
+        description="session clock [s] to show (the nearest kept instant)",
+    )
 
 
 class PushRequest(BaseModel):
     model_config = STRICT
     method: MethodName = Field(..., description="the robot to push")  # type: ignore[valid-type]
     force: tuple[float, float] = Field(
-        ..., description=f"[Fx, Fy] horizontal force on the torso [N], |F| <= "
-        f"{PUSH_FORCE_MAX:.0f}")
-    duration: float = Field(0.1, gt=0.0, le=PUSH_DURATION_MAX, strict=True, allow_inf_nan=False,
-                            description="[s]")
+        ..., description=f"[Fx, Fy] horizontal force on the torso [N], |F| <= {PUSH_FORCE_MAX:.0f}"
+    )
+    duration: float = Field(
+        0.1, gt=0.0, le=PUSH_DURATION_MAX, strict=True, allow_inf_nan=False, description="[s]"
+    )
 
 
 class RobotState(BaseModel):
@@ -120,8 +156,7 @@ class RobotState(BaseModel):
     step_index: int
     in_dsp: bool = Field(description="both feet down inside a step (double support)")
     step_length: float = Field(description="length of the step in progress [m]")
-    status: str = Field(description="clean / knee nearly straight / IK at the speed limit / "
-                        "fell")
+    status: str = Field(description="clean / knee nearly straight / IK at the speed limit / fell")
     fell: bool
     fall_reason: str | None
     waiting: bool = Field(description="restarted, standing by to start in phase")
@@ -132,7 +167,8 @@ class RobotState(BaseModel):
     kappa: float | None = Field(description="kappa(J) of eq. (45)")
     yaw_momentum: float
     reach: list[float | None] | None = Field(
-        description="hip-to-ankle / leg length, left and right")
+        description="hip-to-ankle / leg length, left and right"
+    )
     zmp_ref: list[float] | None
     zmp_measured: list[float] | None = Field(description="centre of pressure [m]")
     pushing: bool
@@ -153,13 +189,15 @@ class StateResponse(BaseModel):
     clock: float = Field(description="simulated time since the live session started [s]")
     shown_t: float | None = Field(
         description="session clock of the instant shown while paused and sought (POST "
-        "/api/sim/seek); null when showing the present")
+        "/api/sim/seek); null when showing the present"
+    )
     kept: KeptRange
     paused: bool
     speed: float
     realtime_factor: float | None = Field(description="simulated / wall time, last seconds")
     compute_realtime_factor: float | None = Field(
-        description="simulated / compute time: how fast the loop could run unpaced")
+        description="simulated / compute time: how fast the loop could run unpaced"
+    )
     robots: list[RobotState]
 
 

@@ -50,23 +50,28 @@ def pages_router(app: FastAPI, viser_port: int, report_dir: Callable[[], Path]) 
     @r.get("/docs", include_in_schema=False)
     def docs() -> HTMLResponse:
         return get_swagger_ui_html(
-            openapi_url=app.openapi_url or "/openapi.json", title=f"{app.title} - API",
+            openapi_url=app.openapi_url or "/openapi.json",
+            title=f"{app.title} - API",
             swagger_js_url=f"{DOCS_ASSETS}/swagger-ui-bundle.js",
             swagger_css_url=f"{DOCS_ASSETS}/swagger-ui.css",
-            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png", oauth2_redirect_url=None,
+            swagger_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+            oauth2_redirect_url=None,
         )
 
     @r.get("/redoc", include_in_schema=False)
     def redoc() -> HTMLResponse:
         return get_redoc_html(
-            openapi_url=app.openapi_url or "/openapi.json", title=f"{app.title} - API",
+            openapi_url=app.openapi_url or "/openapi.json",
+            title=f"{app.title} - API",
             redoc_js_url=f"{DOCS_ASSETS}/redoc.standalone.js",
-            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png", with_google_fonts=False,
+            redoc_favicon_url=f"{DOCS_ASSETS}/favicon.png",
+            with_google_fonts=False,
         )
 
     return r
 
 
 def mount_docs_assets(app: FastAPI) -> None:
-    app.mount(DOCS_ASSETS, StaticFiles(packages=[("fastapi_offline", "static")]),
-              name="docs-assets")
+    app.mount(
+        DOCS_ASSETS, StaticFiles(packages=[("fastapi_offline", "static")]), name="docs-assets"
+    )

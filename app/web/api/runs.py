@@ -45,10 +45,17 @@ class RunManager:
         with self._lock:
             pending = sum(r["status"] in ("queued", "running") for r in self._runs.values())
             if pending >= self.max_pending:
-                raise RunBusy(f"{pending} headless runs are already queued or running; "
-                              "poll GET /api/runs/{id} and try again when one is done")
-            self._runs[run_id] = {"id": run_id, "status": "queued", "summary": None,
-                                  "error": None, "submitted": time.time()}
+                raise RunBusy(
+                    f"{pending} headless runs are already queued or running; "
+                    "poll GET /api/runs/{id} and try again when one is done"
+                )
+            self._runs[run_id] = {
+                "id": run_id,
+                "status": "queued",
+                "summary": None,
+                "error": None,
+                "submitted": time.time(),
+            }
             finished = [k for k, r in self._runs.items() if r["status"] in ("done", "error")]
             for old in finished[: max(0, len(self._runs) - self.keep)]:
                 del self._runs[old]
@@ -60,8 +67,9 @@ class RunManager:
 
         self._set(run_id, status="running")
         try:
-            cfg = RunConfig(params=params, seed=seed,
-                            perturbation=0.01 if seed is not None else 0.0)
+            cfg = RunConfig(
+                params=params, seed=seed, perturbation=0.01 if seed is not None else 0.0
+            )
             summary = run(cfg, max_wall_s=self.max_wall_s).summary()
             self._set(run_id, status="done", summary=finite(summary))
         except Exception as exc:  # noqa: BLE001 - reported through GET /api/runs/{id}
@@ -89,8 +97,7 @@ def runs_router(runs: RunManager) -> APIRouter:
         """Start a headless closed-loop run; poll ``GET /api/runs/{id}`` for its summary (the
         keys of ``simulate --json``, identical to the CLI's for the same arguments)."""
         try:
-            params = ControllerParams().replace(
-                method=body.method, **updates(body))  # type: ignore[attr-defined]
+            params = ControllerParams().replace(method=body.method, **updates(body))  # type: ignore[attr-defined]
         except (ValueError, TypeError) as exc:
             raise unprocessable(str(exc)) from None
         try:

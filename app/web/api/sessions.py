@@ -27,16 +27,20 @@ def resolvers(registry: SessionRegistry):
         try:
             return sid or SHARED, registry.get(sid)
         except NoSuchSession:
-            raise HTTPException(404, detail=f"no session {sid!r}: GET /api/sessions lists "
-                                "them") from None
+            raise HTTPException(
+                404, detail=f"no session {sid!r}: GET /api/sessions lists them"
+            ) from None
 
-    def by_header(x_pelvic_session: str | None = Header(
-            None, description="a session id (default: the shared session)")
-                  ) -> tuple[str, SessionView]:
+    def by_header(
+        x_pelvic_session: str | None = Header(
+            None, description="a session id (default: the shared session)"
+        ),
+    ) -> tuple[str, SessionView]:
         return lookup(x_pelvic_session)
 
-    def by_path(sid: str = Path(..., description="a session id, see GET /api/sessions")
-                ) -> tuple[str, SessionView]:
+    def by_path(
+        sid: str = Path(..., description="a session id, see GET /api/sessions"),
+    ) -> tuple[str, SessionView]:
         return lookup(sid)
 
     return by_header, by_path
@@ -49,13 +53,15 @@ def sessions_router(registry: SessionRegistry) -> APIRouter:
     def list_sessions() -> dict[str, Any]:
         """The sessions that run, their worker and real-time factor, and the capacity."""
         pool = registry.pool
-        return finite({
-            "mode": registry.mode,
-            "sessions": registry.list(),
-            "private_sessions": registry.count_private(),
-            "robot_slots_free": registry.capacity_private,
-            "workers": pool.workers() if pool is not None else [],
-        })
+        return finite(
+            {
+                "mode": registry.mode,
+                "sessions": registry.list(),
+                "private_sessions": registry.count_private(),
+                "robot_slots_free": registry.capacity_private,
+                "workers": pool.workers() if pool is not None else [],
+            }
+        )
 
     @r.post("", status_code=201)
     def open_session() -> dict[str, Any]:
@@ -65,8 +71,9 @@ def sessions_router(registry: SessionRegistry) -> APIRouter:
         except SessionsDisabled as exc:
             raise conflict(str(exc)) from None
         except PoolFull as exc:
-            raise HTTPException(503, detail=f"the workers are full: {exc}; watch the shared "
-                                "session instead") from None
+            raise HTTPException(
+                503, detail=f"the workers are full: {exc}; watch the shared session instead"
+            ) from None
         return {"id": sid, "api": f"/api/sessions/{sid}/state"}
 
     @r.delete("/{sid}")
