@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from app.web.scene import CAMERA_VIEWS, ROBOT_SPACING, camera_pose, slot_offset
+from app.web.camera import CAMERA_VIEWS, ROBOT_SPACING, camera_pose, slot_offset
 
 
 @pytest.mark.parametrize("name", list(CAMERA_VIEWS))

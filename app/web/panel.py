@@ -24,9 +24,11 @@ import viser
 
 from app.live import SPEED_MAX, SPEED_MIN, LiveFrame, live_params
 from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX
+from app.web.camera import CAMERA_VIEWS
 from app.web.lessons import EXPLAIN, PRESETS, analysis_svg, warnings_for
+from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
-from app.web.scene import CAMERA_VIEWS, LAYERS, legend_html
+from app.web.scene import LAYERS
 from controller.params import GROUP_TITLES, GROUPS, METHOD_INFO, METHODS, ControllerParams, spec
 
 if TYPE_CHECKING:

@@ -1,0 +1,57 @@
+"""Named camera views fitted to the robots shown (follow, side, top, front) and where each
+robot stands in the scene."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+ROBOT_SPACING = 1.8  # [m] between robots, in y: labels and gauges never overlap
+
+CAMERA_VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, float], float]] = {
+    # name -> (direction from the robots to the camera, up, vertical field of view [deg]);
+    # the distance is fitted to the robots shown and the browser's aspect (camera_pose).
+    # A narrow field from afar comes close to an orthographic view (side and top, as the
+    # paper's Fig. 11 and Fig. 5-6).
+    "follow": ((0.74, -0.55, 0.38), (0.0, 0.0, 1.0), 50.0),  # front-right, three quarters
+    "side": ((0.0, -1.0, 0.0), (0.0, 0.0, 1.0), 22.0),  # x-z plane
+    "top": ((0.0, 0.0, 1.0), (0.0, 1.0, 0.0), 22.0),  # x-y plane
+    "front": ((1.0, 0.0, 0.15), (0.0, 0.0, 1.0), 35.0),
+}
+VIEW_MARGIN = 0.9  # [m] around the outer robots (labels, footholds ahead and behind)
+
+
+def camera_pose(
+    name: str, n: int, aspect: float, along_x: bool
+) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float], float]:
+    """(position, look_at, up, vertical fov [rad]) of a named view that shows ``n`` robots
+    side by side (along x when ``along_x``) whole in a canvas of ``aspect`` = width/height."""
+    direction, up, fov_deg = CAMERA_VIEWS[name]
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    spread = (max(n, 1) - 1) / 2 * ROBOT_SPACING + VIEW_MARGIN
+    top = 2.3 + 0.3 * max(n - 1, 0)  # the highest label
+    lo = np.array([-spread if along_x else -VIEW_MARGIN, -VIEW_MARGIN if along_x else -spread, 0])
+    hi = np.array([spread if along_x else 1.2, VIEW_MARGIN if along_x else spread, top])
+    centre = (lo + hi) / 2
+    corners = (
+        np.array(
+            [[x, y, z] for x in (lo[0], hi[0]) for y in (lo[1], hi[1]) for z in (lo[2], hi[2])]
+        )
+        - centre
+    )
+    u = np.asarray(up, float) - np.dot(up, d) * d
+    u /= np.linalg.norm(u)
+    right = np.cross(u, d)  # the camera looks along -d
+    half_w, half_h = np.abs(corners @ right).max(), np.abs(corners @ u).max()
+    depth = np.abs(corners @ d).max()
+    fov = math.radians(fov_deg)
+    tan_v = math.tan(fov / 2)
+    dist = depth + max(half_h / tan_v, half_w / (tan_v * max(aspect, 0.2)))
+    return centre + d * dist, centre, up, fov
+
+
+def slot_offset(slot: int, n: int) -> float:
+    """[m] offset of robot ``slot`` among ``n``, centred on 0 (along y; along x, seen from
+    the side, so that no robot hides another)."""
+    return ((n - 1) / 2.0 - slot) * ROBOT_SPACING

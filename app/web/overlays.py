@@ -1,0 +1,181 @@
+"""Geometry of the scene's overlays (footholds, prediction, swing path, stick diagram) and
+their colours; an :class:`Overlay` re-sends a handle's data only when it changed."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from app.live import RobotFrame
+from app.live.history import FrameStore
+from controller.footsteps import LEFT
+from controller.params import METHOD_INFO
+from controller.pelvis_reference import hip_points
+
+# Overlay colours (none of them a method colour).
+PREDICTION = (140, 60, 200)  # predicted CoM path and hip lines
+GROUND = (120, 120, 120)  # footholds, swing path
+SUPPORT = (40, 40, 40)
+ZMP_REF, ZMP_MEAS = (200, 30, 60), (20, 20, 20)
+MOMENTUM = (90, 40, 130)
+STICK_START, STICK_END = (160, 160, 160), (30, 30, 30)
+HIP_BAR = 0.18  # [m] half length of the hip lines drawn on the floor (the pelvis: 0.105)
+HIP_EVERY = 4  # hip lines at every 4th horizon sample (0.4 s apart at T_p = 0.1 s)
+FLOOR_Z = 0.006  # [m] overlays on the floor, just above it
+FOOTHOLD_WINDOW = 1.2  # [m] footholds drawn ahead of and behind the robot
+
+
+def reach_color(reach: float) -> tuple[int, int, int]:
+    """Grey while the knee is bent (reach <= 0.85), to red as the leg straightens (1.0)."""
+    f = float(np.clip((reach - 0.85) / 0.15, 0.0, 1.0)) if math.isfinite(reach) else 0.0
+    return (int(150 + 90 * f), int(150 - 150 * f), int(150 - 150 * f))
+
+
+def rectangle_segments(centres: np.ndarray, size: tuple[float, float], z: float) -> np.ndarray:
+    """(4 M, 2, 3) outline segments of axis-aligned rectangles at ``centres`` (M, 2)."""
+    hx, hy = size[0] / 2, size[1] / 2
+    corners = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
+    pts = centres[:, None, :2] + corners[None]  # (M, 4, 2)
+    seg = np.stack([pts, np.roll(pts, -1, axis=1)], axis=2).reshape(-1, 2, 2)
+    return np.concatenate([seg, np.full(seg.shape[:2] + (1,), z)], axis=2)
+
+
+def polyline_segments(points: np.ndarray, closed: bool = False) -> np.ndarray:
+    """(M - 1 (or M if closed), 2, 3) segments joining consecutive points (M, 3)."""
+    points = np.asarray(points, dtype=float)
+    if len(points) < 2:
+        return np.zeros((0, 2, 3))
+    b = np.roll(points, -1, axis=0) if closed else points[1:]
+    a = points if closed else points[:-1]
+    return np.stack([a, b], axis=1)
+
+
+def dashed(segments: np.ndarray, pieces: int = 4) -> np.ndarray:
+    """Each segment (M, 2, 3) cut into ``pieces`` dashes with gaps: (M * pieces, 2, 3)."""
+    a, b = segments[:, 0], segments[:, 1]
+    f = np.arange(pieces) / pieces
+    start = a[:, None] + (b - a)[:, None] * f[None, :, None]
+    end = a[:, None] + (b - a)[:, None] * (f + 0.6 / pieces)[None, :, None]
+    return np.stack([start, end], axis=2).reshape(-1, 2, 3)
+
+
+def legend_html() -> str:
+    """The scene's colours, for the GUI."""
+
+    def sw(rgb: tuple[int, int, int], text: str, dash: bool = False) -> str:
+        style = f"border-top:3px dashed rgb{rgb}" if dash else f"background:rgb{rgb}"
+        return (
+            f"<span style='display:inline-block;width:16px;height:{0 if dash else 10}px;"
+            f"{style};margin:0 4px 0 10px;vertical-align:middle'></span>{text}"
+        )
+
+    robots = "".join(sw(i.color, i.title) for i in METHOD_INFO.values())
+    parts = [
+        sw(PREDICTION, "predicted CoM and MPC hip line"),
+        sw(PREDICTION, "theta_ref", dash=True),
+        sw(ZMP_REF, "ZMP reference"),
+        sw(ZMP_MEAS, "measured ZMP (CoP)"),
+        sw(GROUND, "footholds"),
+        sw((240, 0, 0), "leg nearly straight"),
+    ]
+    return (
+        f"<div style='font-size:12px;line-height:1.8'>Robots (torso): {robots}<br>"
+        f"{''.join(parts)}</div>"
+    )
+
+
+class Overlay:
+    """One handle for all robots' overlay of one kind, re-sent only when its data changed."""
+
+    def __init__(self, handle: Any):
+        self.handle = handle
+        self._last: dict[str, Any] = {}
+
+    def set(self, **props: Any) -> None:
+        for attr, value in props.items():
+            old = self._last.get(attr)
+            if isinstance(value, np.ndarray) and isinstance(old, np.ndarray):
+                if old.shape == value.shape and np.array_equal(old, value):
+                    continue
+            elif old is not None and old == value:
+                continue
+            setattr(self.handle, attr, value)
+            self._last[attr] = value
+
+
+EMPTY_SEG = np.zeros((1, 2, 3), dtype=np.float32)
+
+
+def seg_array(parts: list[np.ndarray]) -> np.ndarray:
+    parts = [p for p in parts if len(p)]
+    return np.concatenate(parts).astype(np.float32) if parts else EMPTY_SEG
+
+
+def colored(parts: list[tuple[np.ndarray, tuple[int, int, int]]]) -> tuple[np.ndarray, np.ndarray]:
+    """Segments and per-segment colours from (segments, colour) pairs."""
+    parts = [(s, c) for s, c in parts if len(s)]
+    if not parts:
+        return EMPTY_SEG, np.zeros((1, 2, 3), np.uint8)
+    seg = np.concatenate([s for s, _c in parts]).astype(np.float32)
+    col = np.concatenate([np.tile(np.asarray(c, np.uint8), (len(s), 2, 1)) for s, c in parts])
+    return seg, col
+
+
+def robot_prediction(r: RobotFrame, y: np.ndarray) -> list[np.ndarray]:
+    """Predicted CoM path and hip lines over the horizon, on the floor (Fig. 5-6)."""
+    hz = r.horizon
+    if hz is None:
+        return []
+    com = np.vstack([r.com[None, :2], hz.com]) + y
+    path = polyline_segments(np.column_stack([com, np.full(len(com), FLOOR_Z + 0.004)]))
+
+    def bars(p: np.ndarray, theta: np.ndarray, half: float = HIP_BAR) -> np.ndarray:
+        hp = hip_points(p + y, theta, half)  # (N, 2, 2)
+        return np.concatenate([hp, np.full((len(theta), 2, 1), FLOOR_Z + 0.006)], axis=2)
+
+    out = [path]
+    if r.method == "mpc":  # theta_ref's lines longer, so both show where they coincide
+        k = slice(HIP_EVERY - 1, None, HIP_EVERY)
+        out += [bars(hz.com, hz.theta)[k], dashed(bars(hz.com, hz.theta_ref, 1.5 * HIP_BAR)[k])]
+    elif r.method == "redundancy":  # no plan: its hip line now
+        out.append(bars(r.com[None, :2], np.array([r.waist_angle_cmd])))
+    return out
+
+
+def stick_segments(kept: FrameStore, r: RobotFrame) -> np.ndarray | None:
+    """Hips and legs of the last finished step at its lift-off and landing (Fig. 11): the
+    support and swing leg's hip-to-ankle lines and the hip line, (6, 2, 3), world frame."""
+    plan, k = r.plan, r.step_index - 1
+    span = kept.span()
+    if k < 0 or k >= plan.n or span is None:
+        return None
+    frames = kept.between(*span)
+    out = []
+    for t_robot in (float(plan.liftoff_times()[k]), float(plan.landing_times()[k])):
+        found = None
+        for f in reversed(frames):
+            rf = f.robot(r.method)
+            if rf is not None and rf.plan is plan and abs(rf.t - t_robot) < 0.05:
+                found = rf
+                break
+        if found is None:
+            return None
+        out += [
+            [found.hips[0], found.ankles[0]],
+            [found.hips[1], found.ankles[1]],
+            [found.hips[0], found.hips[1]],
+        ]
+    return np.array(out)
+
+
+def swing_path(r: RobotFrame, y: np.ndarray, samples: int = 20) -> np.ndarray:
+    """Path of the swing foot over the step in progress (eq. 20-21)."""
+    plan, k = r.plan, r.step_index
+    if not (0 <= k < plan.n):
+        return np.zeros((0, 2, 3))
+    t = np.linspace(plan.step_start[k] + plan.step_dsp[k], plan.landing_times()[k], samples)
+    feet = plan.sample(t)
+    path = feet.p_left if int(plan.swing_side[k]) == LEFT else feet.p_right
+    return polyline_segments(path + (*y, 0.0))
