@@ -25,7 +25,8 @@ import viser
 from app.live import SPEED_MAX, SPEED_MIN, LiveFrame, live_params
 from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX
 from app.web.camera import CAMERA_VIEWS
-from app.web.lessons import EXPLAIN, PRESETS, analysis_svg, warnings_for
+from app.web.learn_gui import LearnTab
+from app.web.lessons import PRESETS, warnings_for
 from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.scene import LAYERS
@@ -91,7 +92,7 @@ class ControlPanel:
         with tabs.add_tab("Plots", viser.Icon.CHART_DOTS):
             self.plots = LivePlots(gui, view.session)
         with tabs.add_tab("Learn", viser.Icon.SCHOOL):
-            self._build_learn()
+            self.learn = LearnTab(gui, self)
 
     @property
     def session(self):
@@ -206,25 +207,6 @@ class ControlPanel:
     def _to_slider(value: float, meta: dict[str, Any]) -> float:
         return math.log10(max(float(value), meta["log_min"]))
 
-    def _build_learn(self) -> None:
-        gui = self.gui
-        with gui.add_folder("Explain"):
-            self.lesson_choice = gui.add_dropdown(
-                "Layer", tuple(EXPLAIN), initial_value=next(iter(EXPLAIN))
-            )
-            self.lesson = gui.add_markdown(EXPLAIN[self.lesson_choice.value])
-            self.lesson_choice.on_update(
-                lambda _e: setattr(self.lesson, "content", EXPLAIN[self.lesson_choice.value])
-            )
-        with gui.add_folder("Kinematic analysis (Fig. 1-2, eq. 1-5)"):
-            self.theta_slider = gui.add_slider("Pelvic angle [deg]", 0.0, 45.0, 1.0, 0.0)
-            self.analysis_view = gui.add_html(analysis_svg(0.0))
-            self.theta_slider.on_update(
-                lambda _e: setattr(
-                    self.analysis_view, "content", analysis_svg(self.theta_slider.value)
-                )
-            )
-
     # -- callbacks (write intent only) -----------------------------------------------------
     def _say(self, message: str) -> None:
         self._message = message
@@ -335,6 +317,7 @@ class ControlPanel:
             self._update_timeline(frame)
             self.plots.update(frame, now)
             self.inspector.update(frame, now)
+            self.learn.update(frame, now)
 
     def _reflect_params(self, params: ControllerParams) -> None:
         for (group, name), (handle, log) in self.controls.items():
