@@ -21,6 +21,13 @@ Choices where the paper is vague:
   a single support (SSP, the swing foot in the air). In the DSP of step k the ZMP reference
   moves linearly from the previous support foot centre (for the first step: the midpoint of
   the feet) to the support foot of step k; in the SSP it stays at the support foot centre.
+- ``walk.dsp_split = "both_ends"`` (the authors' implementation, SPEC.md section 7) puts half
+  of that DSP at the start of the step and half at its end, after the touch-down: the ZMP moves
+  from the midpoint of the feet to the support foot in the first half, stays in the SSP, and
+  moves on to the midpoint between the support foot and the landed foot in the second. Between
+  two swings the robot stands on both feet for the same ``dsp_ratio * step_time`` and the ZMP
+  follows the same line; what changes is where a step begins (mid-DSP) and the first and
+  closing steps (half a DSP from standing, half a DSP into the final stand).
 - After the closing step the ZMP moves linearly to the midpoint of the feet over one more
   ``dsp_time`` (``final_dsp_time``) and stays there for a final stand of 1.0 s;
   ``t_end`` = end of the closing step + final_dsp_time + 1.0 s.
@@ -62,6 +69,8 @@ FINAL_STAND = 1.0  # [s] stand after the ZMP reached the final midpoint
 _START, _DSP, _DSP_POS, _SSP, _HEIGHT, _SIDE = range(6)  # [s], [s], [s] (> 0), [s] (> 0), [m]
 _FROM, _TO, _SUPPORT = slice(6, 9), slice(9, 12), slice(12, 15)  # (3,) [m] each
 _ZMP_FROM = slice(15, 17)  # (2,) [m]
+_DSP_END_POS = 17  # [s] (> 0) the DSP after the touch-down (both_ends)
+_COLUMNS = 18
 
 
 class PlanSample(NamedTuple):
@@ -111,13 +120,14 @@ class FootstepPlan:
     t_end: float  # [s] end of the final stand
     n_walking_steps: int  # steps that advance the feet (excludes the closing step)
     # -- per-step details (authoritative when a replan changed the timing) --
-    step_duration: np.ndarray  # (n,) [s] DSP + SSP of each step
-    step_dsp: np.ndarray  # (n,) [s] DSP of each step
+    step_duration: np.ndarray  # (n,) [s] DSP + SSP (+ DSP at the end) of each step
+    step_dsp: np.ndarray  # (n,) [s] DSP at the start of each step (before the lift-off)
     step_height: np.ndarray  # (n,) [m] swing-foot lift of each step
     zmp_from: np.ndarray  # (n, 2) [m] ZMP reference at the start of each step's DSP
     feet_init: np.ndarray  # (2, 3) [m] left, right before the first step
     feet_final: np.ndarray  # (2, 3) [m] left, right after the last step
     final_dsp_time: float  # [s] ZMP shift to the final midpoint after the last step
+    step_dsp_end: np.ndarray  # (n,) [s] DSP at the end of each step, after the touch-down
 
     # -- timing -------------------------------------------------------------------------
     @property
@@ -135,8 +145,13 @@ class FootstepPlan:
         return self.step_start + self.step_dsp
 
     def landing_times(self) -> np.ndarray:
-        """(n,) [s] end of each step (the swing foot touches down)."""
-        return self.step_start + self.step_duration
+        """(n,) [s] the swing foot touches down (the step's end, less its end DSP)."""
+        return self.step_start + self.step_duration - self.step_dsp_end
+
+    def dsp_after_landing(self, k: int) -> float:
+        """[s] double support from step ``k``'s touch-down to the next lift-off (or stand)."""
+        nxt = self.step_dsp[k + 1] if k + 1 < self.n else self.final_dsp_time
+        return float(self.step_dsp_end[k] + nxt)
 
     def step_length(self, k: int) -> float:
         """[m] forward length of step ``k`` (clipped to the walking steps), 0 without any."""
@@ -152,22 +167,25 @@ class FootstepPlan:
     # -- the sampler ----------------------------------------------------------------------
     @cached_property
     def _table(self) -> np.ndarray:
-        """(n, 17) per-step columns read by :meth:`sample` (see the ``_START`` .. constants)."""
-        dsp = self.step_dsp
-        return np.column_stack(
+        """(n, 18) per-step columns read by :meth:`sample` (see the ``_START`` .. constants)."""
+        dsp, dsp_end = self.step_dsp, self.step_dsp_end
+        table = np.column_stack(
             [
                 self.step_start,
                 dsp,
                 np.maximum(dsp, 1e-9),
-                np.maximum(self.step_duration - dsp, 1e-9),
+                np.maximum(self.step_duration - dsp - dsp_end, 1e-9),
                 self.step_height,
                 self.swing_side.astype(float),
                 self.swing_from,
                 self.swing_to,
                 self.support_pos,
                 self.zmp_from[:, :2],
+                np.maximum(dsp_end, 1e-9),
             ]
         )
+        assert table.shape[1] == _COLUMNS
+        return table
 
     def sample(self, times: float | np.ndarray, margin: float = 0.0) -> PlanSample:
         """The plan at ``times`` [s] (scalar or (N,)): phase, ZMP reference and box, feet.
@@ -185,14 +203,14 @@ class FootstepPlan:
         idx[after] = self.n
         before = idx < 0
         k = np.minimum(np.maximum(idx, 0), self.n - 1)
-        rows = self._table[k]  # (N, 17)
+        rows = self._table[k]  # (N, 18)
         dsp, ssp, side = rows[:, _DSP], rows[:, _SSP], rows[:, _SIDE]
         support = rows[:, _SUPPORT]
         tau = t - rows[:, _START]  # [s] into the step
         standing = before | after
         outside = bool(standing.any())
         walking = ~standing
-        in_ssp = walking & (tau >= dsp)
+        in_ssp = walking & (tau >= dsp) & (tau < dsp + ssp)
         # eq. (20)-(21): the support foot stays, the swing foot follows the curve of swing.py
         s = np.minimum(np.maximum((tau - dsp) / ssp, 0.0), 1.0)
         if outside:
@@ -208,6 +226,9 @@ class FootstepPlan:
         zmp_from = rows[:, _ZMP_FROM]
         s_dsp = np.minimum(np.maximum(tau / rows[:, _DSP_POS], 0.0), 1.0)[:, None]
         ref = zmp_from + s_dsp * (support[:, :2] - zmp_from)
+        if self.has_end_dsp:  # then on to the midpoint of the support and the landed foot
+            s_end = np.clip((tau - dsp - ssp) / rows[:, _DSP_END_POS], 0.0, 1.0)[:, None]
+            ref = ref + s_end * 0.5 * (rows[:, _TO][:, :2] - support[:, :2])
         if outside:
             b1, a1 = before[:, None], after[:, None]
             init, final = self.feet_init, self.feet_final
@@ -215,7 +236,7 @@ class FootstepPlan:
             p_right = np.where(b1, init[RIGHT], np.where(a1, final[RIGHT], p_right))
             ref = np.where(b1, init[:, :2].mean(axis=0), ref)
             if after.any():  # after the closing step: on to the feet's midpoint, then stay
-                last = self.support_pos[-1, :2]
+                last = self.zmp_at_walk_end
                 s_end = np.clip((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0, 1.0)
                 ref = np.where(a1, last + s_end[:, None] * (final[:, :2].mean(axis=0) - last), ref)
         # ZMP box: both feet's bounding box, or the support foot alone in the SSP
@@ -241,6 +262,19 @@ class FootstepPlan:
             p_right=p_right,
             v_right=v_right,
         )
+
+    @cached_property
+    def has_end_dsp(self) -> bool:
+        """Some step has a DSP after its touch-down (``dsp_split = "both_ends"``)."""
+        return bool(np.any(self.step_dsp_end > 0.0))
+
+    @cached_property
+    def zmp_at_walk_end(self) -> np.ndarray:
+        """(2,) [m] the ZMP reference when the closing step ends."""
+        support = self.support_pos[-1, :2]
+        if self.step_dsp_end[-1] > 0.0:
+            return 0.5 * (support + self.swing_to[-1, :2])
+        return support.copy()
 
     # -- replanning -----------------------------------------------------------------------
     def replanned(self, walk: WalkParams, t_now: float) -> FootstepPlan:
@@ -274,6 +308,7 @@ class FootstepPlan:
                 self.swing_to[j],
                 self.support_pos[j],
                 self.zmp_from[j],
+                float(self.step_dsp_end[j]),
             )
         feet = self.feet_init.copy()
         for j in range(started):
@@ -288,7 +323,7 @@ class _Steps:
     def __init__(self) -> None:
         self.rows: list[tuple] = []
 
-    def add(self, start, duration, dsp, height, side, frm, to, support, zmp_from) -> None:
+    def add(self, start, duration, dsp, height, side, frm, to, support, zmp_from, dsp_end) -> None:
         self.rows.append(
             (
                 start,
@@ -300,6 +335,7 @@ class _Steps:
                 np.array(to, float),
                 np.array(support, float),
                 np.array(zmp_from, float)[:2],
+                dsp_end,
             )
         )
 
@@ -322,12 +358,16 @@ def _finish(
     """
     feet = np.array(feet, dtype=float)
     dsp = walk.dsp_ratio * walk.step_time
+    # the DSP before the lift-off and after the touch-down of each step (SPEC.md section 7)
+    dsp_end = 0.5 * dsp if walk.dsp_split == "both_ends" else 0.0
+    dsp_start = dsp - dsp_end
     half_w = walk.step_width / 2.0
     if steps.rows:
         last = steps.rows[-1]
         t = last[0] + last[1]
         swing = 1 - last[4]
-        zmp_prev = last[7][:2]
+        # the ZMP where the last step left it: its support foot, or on to the landed foot
+        zmp_prev = last[7][:2] + (0.5 * (last[6][:2] - last[7][:2]) if last[9] > 0 else 0.0)
     else:
         t = t_start
         swing = first_swing
@@ -341,10 +381,19 @@ def _finish(
         else:  # closing step: alongside the last foothold
             to = np.array([support[0], y, 0.0])
         steps.add(
-            t, walk.step_time, dsp, walk.foot_height, swing, feet[swing], to, support, zmp_prev
+            t,
+            walk.step_time,
+            dsp_start,
+            walk.foot_height,
+            swing,
+            feet[swing],
+            to,
+            support,
+            zmp_prev,
+            dsp_end,
         )
         feet[swing] = to
-        zmp_prev = support[:2]
+        zmp_prev = support[:2] + (0.5 * (to[:2] - support[:2]) if dsp_end > 0 else 0.0)
         t += walk.step_time
         swing = 1 - swing
     final_dsp = dsp
@@ -367,6 +416,7 @@ def _finish(
         feet_init=np.array(feet_init, dtype=float),
         feet_final=feet,
         final_dsp_time=float(final_dsp),
+        step_dsp_end=steps.column(9),
     )
 
 

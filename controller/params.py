@@ -29,6 +29,11 @@ from typing import Any, Literal
 
 Method = Literal["fixed", "redundancy", "mpc"]
 METHODS: tuple[str, ...] = ("fixed", "redundancy", "mpc")
+# Readings of the lateral distance Delta d_{FP,i,y} of eq. (31)-(32): controller/pelvis_reference.py
+LATERAL_MODES: tuple[str, ...] = ("current", "nominal", "predicted")
+# Where a step's double support lies: all at its start (our plan) or half at each end (the
+# authors' implementation, SPEC.md section 7): controller/footsteps.py
+DSP_SPLITS: tuple[str, ...] = ("start", "both_ends")
 CONTROL_DT = 0.005  # [s] the paper's 200 Hz control period (every layer, every QP)
 
 
@@ -86,6 +91,14 @@ class WalkParams:
     )
     dsp_ratio: float = _f(
         0.2, 0.05, 0.5, 0.01, "", "Double-support share", applies="step", cli="dsp-ratio"
+    )
+    dsp_split: str = _choice(
+        "start",
+        DSP_SPLITS,
+        "Where the DSP lies in a step",
+        applies="step",
+        help="start: all before the lift-off; both_ends: half before the lift-off, half after "
+        "the touch-down (the authors' implementation)",
     )
     foot_height: float = _f(
         0.06, 0.0, 0.15, 0.005, "m", "Foot lift height", applies="step", cli="foot-height"
@@ -155,6 +168,22 @@ class PelvisMpcParams:
     )
     alpha: float = _w(1.0, 0.0, 100.0, "alpha_pel (tracking)", 1e-3, paper=1.0)
     beta: float = _w(1e-6, 1e-10, 1.0, "beta_pel (yaw acceleration)", 1e-10, paper=1e-10)
+    lateral_distance: str = _choice(
+        "current",
+        LATERAL_MODES,
+        "Lateral distance (eq. 31-32)",
+        help="current: pelvis-to-foot now, held over the horizon (the paper's Delta d_{FP,i,y}); "
+        "predicted: per horizon sample; nominal: half the step width",
+    )
+    lateral_floor: float = _f(
+        0.03,
+        0.005,
+        0.1,
+        0.005,
+        "m",
+        "Lateral distance floor",
+        help="smallest pelvis-to-foot lateral distance in eq. (31)-(32) (current, predicted)",
+    )
     angle_limit_deg: float = _f(45.0, 0.0, 50.0, 1.0, "deg", "Pelvic angle limit")
     acc_limit: float = _f(30.0, 1.0, 100.0, 1.0, "rad/s^2", "Yaw acceleration limit")
 

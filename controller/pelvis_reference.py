@@ -34,8 +34,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from controller.params import LATERAL_MODES
+
 HIP_HALF_WIDTH = 0.105  # [m] lateral distance from the pelvis centre to each hip joint
-LATERAL_MODES = ("current", "nominal", "predicted")
 
 
 def lateral_distances(

@@ -50,7 +50,6 @@ from controller.pelvis_reference import lateral_distances, reference_pelvic_angl
 from controller.qp import QpSolver
 
 LAYERS = ("kinematics", "com_mpc", "pelvis_mpc", "ik", "arm_swing")
-LATERAL_MODE, LATERAL_FLOOR = "nominal", 0.03  # TODO(issue 13): from PelvisMpcParams
 
 
 @dataclass(frozen=True)
@@ -224,7 +223,7 @@ class Walker:
 
         # 6. Reference pelvic angle over the horizon (eq. 27-33).
         lateral = lateral_distances(
-            LATERAL_MODE,
+            p.pelvis.lateral_distance,
             com_plan.com,
             plan.p_left[h, :2],
             plan.p_right[h, :2],
@@ -232,7 +231,7 @@ class Walker:
             plan.p_left[0, :2],
             plan.p_right[0, :2],
             p.walk.step_width / 2,
-            LATERAL_FLOOR,
+            p.pelvis.lateral_floor,
         )
         theta_ref = reference_pelvic_angles(
             com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2], p.pelvis.k_pel, lateral

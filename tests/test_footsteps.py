@@ -118,3 +118,30 @@ def test_replanned_keeps_started_steps(plan):
     assert plan.replanned(new, 0.1).n == 7
     late = plan.replanned(new, plan.step_start[-1] + 0.1)
     np.testing.assert_array_equal(late.swing_to, plan.swing_to)
+
+
+def test_both_ends_split_keeps_the_double_support_between_swings():
+    """The authors' split: half the DSP before the lift-off, half after the touch-down."""
+    walk = WalkParams(step_length=0.2, step_time=1.2, dsp_ratio=0.2, n_steps=4)
+    ours = plan_footsteps(walk)
+    theirs = plan_footsteps(WalkParams(**{**vars(walk), "dsp_split": "both_ends"}))
+    dsp = walk.dsp_ratio * walk.step_time
+    np.testing.assert_allclose(theirs.step_dsp, dsp / 2)
+    np.testing.assert_allclose(theirs.step_dsp_end, dsp / 2)
+    np.testing.assert_allclose(ours.step_dsp_end, 0.0)
+    # swings last the same; between two swings both feet are down for one whole DSP
+    np.testing.assert_allclose(
+        theirs.landing_times() - theirs.liftoff_times(), ours.landing_times() - ours.liftoff_times()
+    )
+    np.testing.assert_allclose(theirs.liftoff_times()[1:] - theirs.landing_times()[:-1], dsp)
+    assert theirs.dsp_after_landing(0) == pytest.approx(dsp)
+    # in the end DSP both feet are down and the ZMP is half-way to the landed foot at its end
+    t = theirs.landing_times()[1] + dsp / 2 - 1e-9
+    s = theirs.sample(t)
+    assert s.in_dsp[0] and s.on_ground[0].all()
+    mid = 0.5 * (theirs.support_pos[1, :2] + theirs.swing_to[1, :2])
+    np.testing.assert_allclose(s.zmp_ref[0], mid, atol=1e-6)
+    # the ZMP path is continuous across the step boundary
+    t0 = theirs.step_start[2]
+    a, b = theirs.sample(np.array([t0 - 1e-7, t0 + 1e-7])).zmp_ref
+    np.testing.assert_allclose(a, b, atol=1e-5)

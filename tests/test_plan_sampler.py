@@ -38,19 +38,21 @@ def reference(plan: FootstepPlan, t: float, margin: float) -> dict:
     elif k >= n:
         feet = [list(plan.feet_final[LEFT]), list(plan.feet_final[RIGHT])]
         last = plan.support_pos[-1, :2]
+        if plan.step_dsp_end[-1] > 0:  # both_ends: the closing step ends mid-way to the feet
+            last = last + 0.5 * (plan.swing_to[-1, :2] - last)
         mid = plan.feet_final[:, :2].sum(axis=0) / 2
         a = min(max((t - end_last) / max(plan.final_dsp_time, 1e-9), 0.0), 1.0)
         zmp, ground = (last + a * (mid - last)).tolist(), [feet[LEFT], feet[RIGHT]]
         out.update(in_dsp=False, in_ssp=False, swing_side=-1, s_ssp=1.0)
     else:
         tau = t - plan.step_start[k]
-        dsp, dur = plan.step_dsp[k], plan.step_duration[k]
+        dsp, dur, dsp_end = plan.step_dsp[k], plan.step_duration[k], plan.step_dsp_end[k]
         side = int(plan.swing_side[k])
         support = list(plan.support_pos[k])
-        in_ssp = tau >= dsp
-        s = min(max((tau - dsp) / max(dur - dsp, 1e-9), 0.0), 1.0)
+        ssp = max(dur - dsp - dsp_end, 1e-9)
+        in_ssp = dsp <= tau < dsp + ssp
+        s = min(max((tau - dsp) / ssp, 0.0), 1.0)
         p0, p1, h = plan.swing_from[k], plan.swing_to[k], plan.step_height[k]
-        ssp = max(dur - dsp, 1e-9)
         if s <= 0.0:
             sw, vsw = list(p0), [0.0] * 3
         elif s >= 1.0:
@@ -67,7 +69,10 @@ def reference(plan: FootstepPlan, t: float, margin: float) -> dict:
         a = min(max(tau / max(dsp, 1e-9), 0.0), 1.0)
         zf = plan.zmp_from[k, :2]
         zmp = [zf[i] + a * (support[i] - zf[i]) for i in range(2)]
-        ground = [support] if in_ssp else [support, list(p0)]
+        if dsp_end > 0:  # both_ends: after the touch-down on to the support-landed midpoint
+            b = min(max((tau - dsp - ssp) / dsp_end, 0.0), 1.0)
+            zmp = [zmp[i] + b * 0.5 * (p1[i] - support[i]) for i in range(2)]
+        ground = [support] if in_ssp else [support, list(p1 if s >= 1.0 else p0)]
         out.update(in_dsp=not in_ssp, in_ssp=in_ssp, swing_side=side, s_ssp=s)
     hx, hy = max(FOOT_SIZE[0] / 2 - margin, 0), max(FOOT_SIZE[1] / 2 - margin, 0)
     out["zmp_lo"] = [min(g[0] for g in ground) - hx, min(g[1] for g in ground) - hy]
@@ -87,10 +92,17 @@ def _plans() -> list[FootstepPlan]:
             WalkParams(step_length=0.42, step_time=1.4, n_steps=3), first_swing=RIGHT, x0=0.7
         ),
         base.replanned(other, base.step_start[2] + 0.3),  # per-step timings differ
+        plan_footsteps(
+            WalkParams(step_length=0.35, dsp_ratio=0.3, n_steps=4, dsp_split="both_ends")
+        ),
+        base.replanned(  # from our split to the authors' mid-walk
+            WalkParams(step_length=0.2, dsp_ratio=0.2, n_steps=5, dsp_split="both_ends"),
+            base.step_start[1] + 0.1,
+        ),
     ]
 
 
-@pytest.mark.parametrize("which", range(3))
+@pytest.mark.parametrize("which", range(5))
 def test_sampler_matches_the_reference_at_random_times(which):
     plan = _plans()[which]
     rng = np.random.default_rng(which)

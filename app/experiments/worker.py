@@ -151,7 +151,7 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
     )
     n_walk = plan.n_walking_steps
     lift = plan.step_start[:n_walk] + plan.step_dsp[:n_walk]
-    land = plan.step_start[:n_walk] + plan.step_duration[:n_walk]
+    land = plan.landing_times()[:n_walk]
     walking = (t >= plan.t_start) & (t <= plan.walk_end)
     sub = np.flatnonzero(walking)[::DOWNSAMPLE]
     # theta_ref's first sample refers to one MPC sample after the tick (t + T_p); a row's time

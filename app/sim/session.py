@@ -236,8 +236,7 @@ class Session:
         # (per-step timing: a replan changes the timing of later steps only).
         j = len(self.landings)  # landings are recorded in order
         if j < n and not self.fell:
-            next_dsp = plan.step_dsp[j + 1] if j + 1 < n else plan.final_dsp_time
-            if m.t >= plan.landing_times()[j] + 0.5 * next_dsp:
+            if m.t >= plan.landing_times()[j] + 0.5 * plan.dsp_after_landing(j):
                 soles = world.sole_positions()
                 side = int(plan.swing_side[j])
                 landed = soles[side, :2] - soles[1 - side, :2]
