@@ -47,9 +47,11 @@ def test_a_session_split_across_workers_keeps_step(pool):
         # one time base: the robots started together (robot time = part clock - start clock)
         starts = [r.clock - r.t for r in f.robots]
         assert max(starts) - min(starts) < 0.011, starts  # two ticks
-        # and the parts keep within the catch-up margin of each other
+        # and the merged frame shows every robot at the slowest part's instant (its newest
+        # frame not later than it), however far one worker ran ahead
         clocks = [r.clock for r in f.robots]
-        assert max(clocks) - min(clocks) < 0.5, clocks
+        assert max(clocks) <= f.clock + 1e-9 and f.clock in clocks, (f.clock, clocks)
+        assert max(clocks) - min(clocks) < 0.5, clocks  # one published frame, not a drift
         assert all(not r.fell for r in f.robots)
         # intent reaches every part; the session's rows merge one set per robot
         ticket = s.update_params(walk={"step_length": 0.25})
@@ -118,3 +120,16 @@ def test_a_dead_worker_is_reported_replaced_and_its_sessions_restart(pool):
             assert client.get("/api/state").status_code == 200
     finally:
         registry.shutdown()
+
+
+def test_a_part_is_shown_at_its_newest_frame_not_later_than_the_instant():
+    import collections
+    from types import SimpleNamespace
+
+    from app.live.pool import _at
+
+    recent = collections.deque(SimpleNamespace(clock=c) for c in (1.0, 1.1, 1.2, 1.3))
+    assert _at(recent, 1.25).clock == 1.2
+    assert _at(recent, 1.2).clock == 1.2
+    assert _at(recent, 5.0).clock == 1.3
+    assert _at(recent, 0.5).clock == 1.0  # ran ahead beyond the kept window: its oldest

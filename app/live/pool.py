@@ -16,6 +16,7 @@ and restarts the robots of every session it held, all together.
 
 from __future__ import annotations
 
+import collections
 import dataclasses
 import logging
 import multiprocessing
@@ -33,6 +34,8 @@ from app.live.intent import Intent, check_methods
 from app.live.loop import PUBLISH_HZ
 from app.live.session import KEEP_S, SessionView
 from app.live.worker import FrameCodec, worker_main
+
+ALIGN_S = 3.0  # [s] of each part's frames kept to show all robots at one instant
 
 log = logging.getLogger(__name__)
 START_TIMEOUT_S = 60.0  # a new worker imports numpy, MuJoCo and Pinocchio first
@@ -71,7 +74,10 @@ class RemoteSession(SessionView):
         self.sid = sid
         self.pool = pool
         self.parts: dict[str, _Worker] = {}  # method -> the worker running it
-        self._latest: dict[str, LiveFrame] = {}  # method -> its part's latest frame
+        # method -> its part's recent frames (newest last): the merged frame shows every robot
+        # at the slowest part's instant, so side-by-side robots compare the same moment even
+        # when one worker runs late (a busy machine, a worker that started later)
+        self._recent: dict[str, collections.deque[LiveFrame]] = {}
         self._rows: dict[str, list[np.ndarray]] = {}  # rows since the last merged frame
         self._restarted = False
         self._seq = 0
@@ -109,26 +115,36 @@ class RemoteSession(SessionView):
     def receive_part(self, method: str, frame: LiveFrame) -> None:
         """A part's frame: merge the parts' latest frames into one session frame."""
         with self._merge_lock:
-            self._latest[method] = frame
+            recent = self._recent.get(method)
+            if recent is None or frame.restarted:
+                recent = self._recent[method] = collections.deque(
+                    maxlen=int(ALIGN_S * self.pool.publish_hz) + 1
+                )
+            recent.append(frame)
             for m, rows in frame.rows.items():
                 self._rows.setdefault(m, []).append(rows)
             self._restarted |= frame.restarted
-            order = [m for m in self.intent.methods if m in self._latest and m in self.parts]
+            order = [m for m in self.intent.methods if m in self._recent and m in self.parts]
             if not order or (method != order[0] and not frame.paused):
                 return  # merge on the lead part's frames (and every frame while paused)
-            parts = [self._latest[m] for m in order]
-            lead = parts[0]
+            latest = [self._recent[m][-1] for m in order]
+            instant = min(p.clock for p in latest)  # the slowest part
+            paused = all(p.paused for p in latest)
+            # running: each robot as it was at that instant; paused: as it stands (a single
+            # step must show every part's new tick)
+            parts = latest if paused else [_at(self._recent[m], instant) for m in order]
+            lead = latest[0]
             rtf = [p.realtime_factor for p in parts]
             crtf = [p.compute_realtime_factor for p in parts]
             self._seq += 1
             merged = dataclasses.replace(
                 lead,
                 seq=self._seq,
-                clock=min(p.clock for p in parts),  # the slowest part
-                paused=all(p.paused for p in parts),
+                clock=instant,
+                paused=paused,
                 realtime_factor=None if None in rtf else min(rtf),  # type: ignore[type-var]
                 compute_realtime_factor=None if None in crtf else min(crtf),  # type: ignore
-                intent_version=min(p.intent_version for p in parts),
+                intent_version=min(p.intent_version for p in parts),  # what is shown
                 steps_done=min(p.steps_done for p in parts),
                 pushes_done=min(p.pushes_done for p in parts),
                 robots=tuple(
@@ -141,6 +157,15 @@ class RemoteSession(SessionView):
             )
             self._rows, self._restarted = {}, False
         self.receive(merged)
+
+
+def _at(recent: collections.deque[LiveFrame], instant: float) -> LiveFrame:
+    """The newest of a part's ``recent`` frames not later than ``instant`` (its oldest kept
+    frame when all are later: the part ran ahead by more than the kept window)."""
+    for f in reversed(recent):
+        if f.clock <= instant + 1e-9:
+            return f
+    return recent[0]
 
 
 @dataclass
