@@ -30,6 +30,7 @@ from app.experiments.results import (
     case_key,
     length_key,
 )
+from app.experiments.results_more import BalanceCase, BalanceSection
 from app.experiments.verdicts import (
     FAILS,
     HOLDS,
@@ -78,7 +79,16 @@ def max_step(fixed: float, mpc: float) -> StudyResults:
     return dataclasses.replace(empty(), max_step=ms)
 
 
-def _waist(m: str, peak: float = 22.0, lead: float = 0.1, rate: float = 5.0, acc: float = 100.0):
+def _waist(
+    m: str,
+    peak: float = 22.0,
+    lead: float = 0.1,
+    rate: float = 5.0,
+    acc: float = 100.0,
+    toward: float = 0.0,
+):
+    """A step turning from +peak to -peak; ``toward``: the DSP's share of the range moved
+    toward the swing (< 0: away)."""
     return WaistCase(
         method=m,
         step_length=0.4,
@@ -89,9 +99,9 @@ def _waist(m: str, peak: float = 22.0, lead: float = 0.1, rate: float = 5.0, acc
         angle_min_deg=-peak,
         angle_max_deg=peak,
         peak_abs_angle_deg=peak,
-        dsp_change_deg=0.0,
+        dsp_change_deg=-toward * 2 * peak,
         range_deg=2 * peak,
-        dsp_share_of_range=0.0,
+        dsp_share_of_range=abs(toward),
         peak_abs_rate_deg_s=50.0,
         peak_abs_rate_change_deg_s2=acc,
         rate_at_liftoff_toward_swing_deg_s=rate,
@@ -162,8 +172,35 @@ def kappa_own_limit(at_limit: float, past: float, mpc_past: float) -> StudyResul
     return dataclasses.replace(empty(), kappa=KappaSection([], [lc, ff], {}, near, {}), max_step=ms)
 
 
-def zmp(cop: float, lipm: float) -> StudyResults:
-    return dataclasses.replace(empty(), zmp=ZmpSection(0.3, True, True, cop, cop, lipm, lipm))
+def zmp(p5_mm: float, tilt_deg: float) -> StudyResults:
+    case = BalanceCase("mpc", 0.3, True, False, p5_mm / 2, p5_mm, tilt_deg)
+    return dataclasses.replace(
+        empty(),
+        zmp=ZmpSection(0.3, True, True, 1.0, 1.0, 1.0, 0.95),
+        balance=BalanceSection([0.3], {case_key("mpc", 0.3): case}),
+    )
+
+
+def kappa_events(lift: tuple[float, float], land: tuple[float, float]) -> StudyResults:
+    """(MPC, redundancy) median kappa at lift-off and at landing, at 0.4 m."""
+    cases = {}
+    for i, m in enumerate(("mpc", "redundancy")):
+        k = _kappa(m, 0.4, 100.0)
+        cases[case_key(m, 0.4)] = dataclasses.replace(
+            k, kappa_liftoff_median=lift[i], kappa_landing_median=land[i]
+        )
+    return dataclasses.replace(empty(), kappa=KappaSection([0.4], [], cases, {}, {}))
+
+
+def yaw_030(on: tuple[float, float, float], off: tuple[float, float, float]) -> StudyResults:
+    return yaw(*((m, 0.3, a, b, False) for m, a, b in zip(METHODS, on, off, strict=True)))
+
+
+def least(means: dict[float, tuple[float, float, float]]) -> StudyResults:
+    """Length -> (fixed, redundancy, MPC) means."""
+    return energy(
+        {(m, x): (v, 1) for x, row in means.items() for m, v in zip(METHODS, row, strict=True)}
+    )
 
 
 L1, L2 = paper.ENERGY_MPC_BELOW_REDUNDANCY  # 0.35, 0.40
@@ -179,9 +216,10 @@ CASES: dict[str, dict[str, StudyResults]] = {
         HOLDS: waist(_waist("mpc", peak=24.0), _waist("redundancy")),
         FAILS: waist(_waist("mpc", peak=12.0), _waist("redundancy")),
     },
-    "waist_turns_in_dsp": {
-        HOLDS: waist(_waist("mpc"), _waist("redundancy", lead=-0.05, rate=-10.0)),
-        FAILS: waist(_waist("mpc", lead=math.nan), _waist("redundancy", lead=-0.05, rate=-10.0)),
+    "waist_turns_in_dsp": {  # a sine moves 9.5 % of its range in a 20 % DSP
+        HOLDS: waist(_waist("mpc", toward=0.09), _waist("redundancy", toward=0.0)),
+        PARTLY: waist(_waist("mpc", toward=0.05), _waist("redundancy", toward=0.0)),
+        FAILS: waist(_waist("mpc", toward=0.001), _waist("redundancy", toward=0.0)),
     },
     "waist_rate_sharp": {
         HOLDS: waist(_waist("mpc", acc=100.0), _waist("redundancy", acc=300.0)),
@@ -305,7 +343,24 @@ CASES: dict[str, dict[str, StudyResults]] = {
         PARTLY: kappa_own_limit(50.0, 80.0, 45.0),
         FAILS: kappa_own_limit(50.0, 80.0, 120.0),
     },
-    "zmp": {HOLDS: zmp(1.0, 0.95), PARTLY: zmp(0.97, 0.95), FAILS: zmp(0.90, 0.95)},
+    "zmp": {HOLDS: zmp(12.0, 0.5), PARTLY: zmp(12.0, 1.5), FAILS: zmp(1.0, 0.5)},
+    "energy_least": {
+        HOLDS: least({0.15: (15, 13, 10), 0.3: (50, 60, 150), 0.4: (900, 800, 400)}),
+        PARTLY: least(
+            {0.15: (15, 13, 10), 0.2: (19, 18, 17), 0.3: (50, 60, 150), 0.35: (50, 60, 150)}
+        ),
+        FAILS: least({0.15: (15, 13, 17), 0.3: (50, 60, 150), 0.4: (900, 800, 400)}),
+    },
+    "yaw_030_similar": {
+        HOLDS: yaw_030((1.0, 1.05, 1.1), (2.0, 2.1, 2.2)),
+        PARTLY: yaw_030((1.0, 1.05, 1.1), (2.0, 2.1, 2.9)),
+        FAILS: yaw_030((0.5, 1.05, 1.1), (2.0, 2.1, 2.2)),
+    },
+    "kappa_040_events": {
+        HOLDS: kappa_events(lift=(80.0, 60.0), land=(50.0, 70.0)),
+        PARTLY: kappa_events(lift=(80.0, 60.0), land=(70.0, 50.0)),
+        FAILS: kappa_events(lift=(60.0, 80.0), land=(70.0, 50.0)),
+    },
 }
 
 
@@ -396,3 +451,28 @@ def test_report_from_synthetic_results_keeps_rows_intact():
     assert len(rows) == 2 + len(r.claims)
     assert {_cells(line) for line in rows} == {5}
     assert "\\|d rate/dt\\|" in table
+
+
+def test_energy_partly_needs_half_of_the_comparisons():
+    """One comparison of four in the paper's direction is not "partly"."""
+    one_of_four = energy(
+        {
+            ("fixed", 0.25): (20, 1),
+            ("redundancy", 0.25): (25, 1),
+            ("mpc", 0.25): (18, 1),
+            ("fixed", 0.3): (50, 1),
+            ("redundancy", 0.3): (40, 1),
+            ("mpc", 0.3): (45, 1),
+        }
+    )
+    assert BY_ID["energy_mid"].judge(QUICK, one_of_four).verdict == FAILS
+
+
+def test_significance_is_over_the_repeats():
+    """Welch's t-test on the repeats' means: a gap the repeats' spread covers is n.s."""
+    a = dataclasses.replace(_cell(10.0, 5.0), run_means=[5.0, 15.0, 8.0, 12.0])
+    b = dataclasses.replace(_cell(11.0, 5.0), run_means=[6.0, 16.0, 9.0, 13.0])
+    c = dataclasses.replace(_cell(30.0, 5.0), run_means=[29.0, 31.0, 30.5, 29.5])
+    assert not sections.significant(a, b)
+    assert sections.significant(a, c)
+    assert sections.welch_p([1.0], [2.0, 3.0]) is None

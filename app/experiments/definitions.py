@@ -22,15 +22,27 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from app.experiments import paper
-from controller.params import GROUPS, METHODS, ControllerParams
+from controller.params import GROUPS, LATERAL_MODES, METHODS, ControllerParams
 
 ROTATING = ("redundancy", "mpc")
 EXTRACTS = ("step", "walk", "zmp")
 SEED_PERTURBATION = 0.01  # [rad] std of the seeded initial perturbation of a repeat
+# A seeded repeat is also pushed through the whole run (app.sim.session.RunConfig): a
+# horizontal force on the torso, each axis N(0, DISTURBANCE) [N], renewed every
+# DISTURBANCE_PERIOD [s]. 5 N is 1 % of the robot's weight (~0.1 m/s^2 on the CoM): unmodelled
+# pulls such as a tether or a hand on a safety rope. 10 N made the MPC fall at 0.40 m within 10
+# steps (seed 0); at 5 N both 20-step probes at 0.40 m walked clean. Repeats then differ for
+# the whole run, not only by a start-up transient that dies out.
+DISTURBANCE = 5.0  # [N]
+DISTURBANCE_PERIOD = 0.1  # [s]
 # Parameters a RunSpec sets through its own fields; an override may not set them again.
 _OWN_FIELDS = ("walk.step_length", "walk.n_steps", "arms.enabled")
 
 Override = tuple[str, Any]  # ("group.name", value), e.g. ("pelvis.k_pel", 0.3)
+# One axis of the sensitivity section: a parameter, its values off the default, the methods.
+SensitivityAxis = tuple[str, tuple[Any, ...], tuple[str, ...]]
+LATERAL = "pelvis.lateral_distance"
+_DEFAULT_MODE = ControllerParams().pelvis.lateral_distance
 
 
 def _check_override(name: str, value: Any) -> None:
@@ -50,7 +62,8 @@ def _check_override(name: str, value: Any) -> None:
 
 @dataclass(frozen=True)
 class RunSpec:
-    """One closed-loop run; repeats differ by ``seed`` (perturbation 0.01 rad when seeded).
+    """One closed-loop run; repeats differ by ``seed`` (when seeded: a 0.01 rad start
+    perturbation and random pushes through the run, :data:`DISTURBANCE`).
 
     ``overrides`` sets any other parameter of :class:`ControllerParams`, as ``("group.name",
     value)`` pairs (kept sorted by name, so equal specs compare and hash equal).
@@ -76,6 +89,11 @@ class RunSpec:
     @property
     def perturbation(self) -> float:
         return SEED_PERTURBATION if self.seed is not None else 0.0
+
+    @property
+    def disturbance(self) -> float:
+        """[N] std of the seeded pushes (0 without a seed)."""
+        return DISTURBANCE if self.seed is not None else 0.0
 
     @property
     def key(self) -> str:
@@ -119,6 +137,10 @@ class Study:
     zmp_length: float = paper.ZMP_LENGTH  # Fig. 15
     methods: tuple[str, ...] = field(default=METHODS)
     overrides: tuple[Override, ...] = ()  # applied to every run (a sweep's cell)
+    # the sensitivity section (app.sweep's limit search, one parameter at a time off its
+    # default, plus the baseline); its walks have sensitivity_steps steps
+    sensitivity: tuple[SensitivityAxis, ...] = ()
+    sensitivity_steps: int = 6
 
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
         """The unseeded run every figure section shares at one (method, length)."""
@@ -129,6 +151,12 @@ class Study:
             RunSpec(method, length(step_length), self.energy_steps, True, seed, self.overrides)
             for seed in range(self.energy_repeats)
         ]
+
+    def lateral_run(self, mode: str, step_length: float) -> RunSpec:
+        """MPC at one figure length with one reading of the lateral distance (the default
+        mode's run is the figure run)."""
+        extra = () if mode == _DEFAULT_MODE else ((LATERAL, mode),)
+        return RunSpec("mpc", length(step_length), self.n_steps, True, None, self.overrides + extra)
 
     def is_figure_run(self, spec: RunSpec) -> bool:
         """Whether ``spec`` is the figure run of its (method, length), arms on."""
@@ -144,6 +172,13 @@ FULL = Study(
     energy_lengths=paper.TABLE1_LENGTHS,
     energy_repeats=paper.TABLE1_RUNS,
     energy_steps=paper.TABLE1_STEPS,
+    sensitivity=(
+        ("walk.dsp_ratio", (0.1, 0.35), ("fixed", "mpc")),
+        ("walk.step_time", (0.8, 1.4), ("fixed", "mpc")),
+        ("pelvis.k_pel", (0.15, 0.45), ("mpc",)),  # the fixed pelvis does not read k_pel
+        ("walk.dsp_split", ("both_ends",), ("fixed", "mpc")),
+        (LATERAL, tuple(m for m in LATERAL_MODES if m != _DEFAULT_MODE), ("mpc",)),
+    ),
 )
 QUICK = Study(
     name="quick",
@@ -154,6 +189,8 @@ QUICK = Study(
     energy_lengths=(0.15, 0.30, 0.40),
     energy_repeats=2,
     energy_steps=6,
+    sensitivity=(("walk.dsp_split", ("both_ends",), ("mpc",)),),
+    sensitivity_steps=4,
 )
 
 Requests = dict[RunSpec, set[str]]
@@ -179,6 +216,9 @@ def planned_runs(study: Study) -> Requests:
         for m in study.methods:
             _add(req, study.figure_run(m, x), "step")
     _add(req, study.figure_run("mpc", study.zmp_length), "zmp")  # section 7
+    for x in study.figure_lengths:  # section 3: the lateral distance's readings
+        for mode in LATERAL_MODES:
+            _add(req, study.lateral_run(mode, x), "step")
     for x in study.energy_lengths:  # section 5: Table 1
         for m in study.methods:
             for spec in study.energy_runs(m, x):

@@ -483,7 +483,10 @@ def make_all(study: Study, results: Results, r: StudyResults, folder: Path) -> d
     """Write every figure into ``folder``; returns name -> file name (drawn figures only)."""
     folder.mkdir(parents=True, exist_ok=True)
     out = {}
-    for name, fn in FIGURES.items():
+    from app.experiments.figures_more import fig_energy_joints, fig_sensitivity
+
+    more = {"energy_joints": fig_energy_joints, "sensitivity": fig_sensitivity}
+    for name, fn in {**FIGURES, **more}.items():
         file = fn(study, results, r, folder / f"{name}.png")
         if file:
             out[name] = file

@@ -44,7 +44,13 @@ def max_step(study: Study, r: StudyResults) -> Measured:
     if f is None or m is None:
         return None
     red_text = "None" if red is None else format(red, ".2f")
-    return dict(fixed=f, redundancy=red_text, mpc=m, increase=100.0 * (m / f - 1.0))
+    walks = " / ".join(
+        "-" if (w := r.max_step[k].walks_limit) is None else f"{w:.2f}"
+        for k in ("fixed", "redundancy", "mpc")
+    )
+    return dict(
+        fixed=f, redundancy=red_text, mpc=m, increase=100.0 * (m / f - 1.0), walks=walks + " m"
+    )
 
 
 def _waist_pair(r: StudyResults) -> tuple[Any, Any]:
@@ -64,20 +70,34 @@ def waist_amplitude(study: Study, r: StudyResults) -> Measured:
     )
 
 
+def _toward_share(c: Any) -> float:
+    """The DSP's share of the step's waist range, signed: > 0 toward the coming swing."""
+    turn = 1.0 if c.angle_end_deg >= c.angle_start_deg else -1.0
+    return c.dsp_share_of_range * (1.0 if c.dsp_change_deg * turn > 0 else -1.0)
+
+
 def waist_turns(study: Study, r: StudyResults) -> Measured:
+    """How far each method's waist turns toward the coming swing in the DSP, against a sine
+    over the step (the share a sine moves in the same DSP)."""
+    from app.experiments.sections_more import sine_share
+
     mpc, red = _waist_pair(r)
     if not (mpc and red):
         return None
-    red_lead, red_rate = red.reversal_before_liftoff_s, red.rate_at_liftoff_toward_swing_deg_s
+    sine = sine_share(mpc.dsp_time / mpc.step_time)
+    m, d = _toward_share(mpc), _toward_share(red)
     return dict(
         length=LONG,
-        mpc_lead=mpc.reversal_before_liftoff_s,
-        mpc_rate=mpc.rate_at_liftoff_toward_swing_deg_s,
-        red_after=-red_lead,
-        red_rate=red_rate,
-        red_early=bool(red_lead > 0 and red_rate > 0),
+        sine=100 * sine,
+        mpc_share=100 * m,
+        red_share=100 * d,
+        mpc_ratio=m / sine,
+        red_ratio=d / sine,
+        mpc_minus_red=(m - d) / sine,
         mpc_dsp=mpc.dsp_change_deg,
         red_dsp=red.dsp_change_deg,
+        mpc_range=mpc.range_deg,
+        mpc_rate=mpc.rate_at_liftoff_toward_swing_deg_s,
     )
 
 
@@ -201,6 +221,77 @@ def own_limit_differs(study: Study, r: StudyResults) -> bool:
     return lc is not None and abs(lc - paper.MAX_STEP["fixed"]) > 1e-9
 
 
+def energy_least(study: Study, r: StudyResults) -> Measured:
+    """At each length where at least two methods walked: is the MPC's mean the least?"""
+    wins, n, exceptions, details = 0, 0, [], []
+    for x in r.energy.lengths:
+        cells = {m: c for m in study.methods if (c := r.energy.cell(m, x))}
+        if "mpc" not in cells or len(cells) < 2:
+            continue
+        n += 1
+        least = min(cells, key=lambda m: cells[m].mean)
+        if least == "mpc":
+            wins += 1
+        else:
+            exceptions.append(f"{x:.2f}")
+            details.append(f"{x:.2f}: {least} {_vs(cells[least], cells['mpc'])} (MPC)")
+    if not n:
+        return None
+    return dict(
+        wins=wins,
+        n=n,
+        share=wins / n,
+        misses=n - wins,
+        exceptions=", ".join(exceptions) or "none",
+        details="; ".join(details) or "-",
+    )
+
+
+def yaw_similar(study: Study, r: StudyResults) -> Measured:
+    """Spread of the methods' peak yaw momentum at the short figure length, arms on and off."""
+    x = min(paper.FIGURE_LENGTHS)
+    cases = [r.yaw_momentum.cases.get(case_key(m, x)) for m in study.methods]
+    if not all(cases):
+        return None
+    out: dict[str, Any] = dict(length=x)
+    for key in ("arms", "no_arms"):
+        peaks = [getattr(c, key).peak for c in cases]
+        if any(p is None or getattr(c, key).fell for p, c in zip(peaks, cases, strict=True)):
+            return None
+        out[f"spread_{key}"] = (max(peaks) - min(peaks)) / max(peaks)
+        out[f"peaks_{key}"] = " / ".join(f"{p:.2f}" for p in peaks)
+    out["spread"] = max(out["spread_arms"], out["spread_no_arms"])
+    out["spread_percent"] = 100 * out["spread"]
+    return out
+
+
+def kappa_events(study: Study, r: StudyResults) -> Measured:
+    """At the long length: MPC's kappa at lift-off above redundancy's, redundancy's at
+    landing above MPC's (median over the steps; J_low and its leg columns)."""
+    mpc, red = r.kappa.case("mpc", LONG), r.kappa.case("redundancy", LONG)
+    if not (mpc and red and mpc.kappa_liftoff_median and red.kappa_liftoff_median):
+        return None
+    if not (mpc.kappa_landing_median and red.kappa_landing_median):
+        return None
+    lift = mpc.kappa_liftoff_median > red.kappa_liftoff_median
+    land = red.kappa_landing_median > mpc.kappa_landing_median
+    nan = float("nan")
+    return dict(
+        length=LONG,
+        liftoff_mpc_higher=lift,
+        landing_red_higher=land,
+        n_agree=int(lift) + int(land),
+        mpc_lift=mpc.kappa_liftoff_median,
+        red_lift=red.kappa_liftoff_median,
+        mpc_land=mpc.kappa_landing_median,
+        red_land=red.kappa_landing_median,
+        mpc_lift_legs=mpc.kappa_legs_liftoff_median or nan,
+        red_lift_legs=red.kappa_legs_liftoff_median or nan,
+        mpc_land_legs=mpc.kappa_legs_landing_median or nan,
+        red_land_legs=red.kappa_legs_landing_median or nan,
+    )
+
+
 def kappa_diverges(study: Study, r: StudyResults) -> Measured:
     f = r.kappa.cases.get(case_key("fixed", paper.KAPPA_DIVERGES_LENGTH))
     m = r.kappa.cases.get(case_key("mpc", paper.KAPPA_DIVERGES_LENGTH))
@@ -237,10 +328,19 @@ def kappa_own_limit(study: Study, r: StudyResults) -> Measured:
 
 def zmp(study: Study, r: StudyResults) -> Measured:
     z = r.zmp
-    if not z.available:
+    b = r.balance.cases.get(case_key("mpc", study.zmp_length)) if r.balance else None
+    if not z.available or b is None or b.margin_p5_mm is None:
         return None
     cop, lipm = z.cop_in_measured_support_walking, z.lipm_in_planned_support_walking
-    return dict(cop=cop, lipm=lipm, cop_percent=cop * 100, lipm_percent=lipm * 100)
+    return dict(
+        cop=cop,
+        lipm=lipm,
+        cop_percent=cop * 100,
+        lipm_percent=lipm * 100,
+        p5=b.margin_p5_mm,
+        min=b.margin_min_mm,
+        tilt=b.tilt_max_deg,
+    )
 
 
 def kappa_ratio_paper_length(study: Study, r: StudyResults) -> Measured:

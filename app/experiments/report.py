@@ -12,13 +12,43 @@ from __future__ import annotations
 from typing import Any
 
 import jinja2
+import numpy as np
 
 from app.experiments import paper
-from app.experiments.definitions import ROTATING, SEED_PERTURBATION, Study
+from app.experiments.definitions import (
+    DISTURBANCE,
+    DISTURBANCE_PERIOD,
+    ROTATING,
+    SEED_PERTURBATION,
+    Study,
+)
 from app.experiments.results import StudyResults, case_key, length_key
+from app.experiments.sections import SIGNIFICANCE
 from app.experiments.verdicts import FAILS, HOLDS, NOT_MEASURED, PARTLY
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
-from controller.params import METHOD_INFO
+from controller.params import METHOD_INFO, ControllerParams
+
+_P = ControllerParams()
+# joints grouped for the energy breakdown: group -> name fragments of models.dyros_jet.JOINTS
+JOINT_GROUPS = {
+    "hip yaw": ("hip_yaw",),
+    "hip roll": ("hip_roll",),
+    "hip pitch": ("hip_pitch",),
+    "knee": ("knee",),
+    "ankle pitch": ("ankle_pitch",),
+    "ankle roll": ("ankle_roll",),
+    "waist": ("waist",),
+    "arms": ("shoulder", "elbow"),
+}
+
+
+def joint_groups(per_joint: list[float], joints: list[str]) -> dict[str, float]:
+    """Per-joint figures summed into :data:`JOINT_GROUPS` (both legs together)."""
+    return {
+        g: sum(v for v, j in zip(per_joint, joints, strict=True) if any(f in j for f in frags))
+        for g, frags in JOINT_GROUPS.items()
+    }
+
 
 VERDICT_MARK = {
     HOLDS: "**holds**",
@@ -68,6 +98,35 @@ def lengths(xs: Any, spec: str = ".2f", sep: str = ", ") -> str:
     return sep.join(format(x, spec) for x in xs)
 
 
+def stdev(values: list[float]) -> float | None:
+    """Population std of a list (None when empty)."""
+    return float(np.std(values)) if values else None
+
+
+def energy_note(r: StudyResults) -> str:
+    """Net work against eq. (44) at 1 ms and at 200 Hz over the seeded runs that did not fall:
+    how much of either figure does no net work."""
+    rows = [
+        rec.summary
+        for rec in r.runs.values()
+        if rec.summary
+        and rec.spec.seed is not None
+        and not rec.summary.get("fell")
+        and rec.summary.get("work_net_total") is not None
+        and rec.summary.get("energy_total")
+    ]
+    if not rows:
+        return "no net-work figure recorded"
+    net_sub = np.median([s["work_net_total"] / s["energy_total_substep"] for s in rows])
+    net_ctrl = np.median([s["work_net_total"] / s["energy_total"] for s in rows])
+    ratio = np.median([s["energy_total_substep"] / s["energy_total"] for s in rows])
+    return (
+        f"over the {len(rows)} seeded runs, median: the 1 ms sum is x{ratio:.2f} the 200 Hz "
+        f"one, and the net work, torque x speed summed with its sign, is {100 * net_sub:.0f} % "
+        f"of the 1 ms figure and {100 * net_ctrl:.0f} % of the 200 Hz one"
+    )
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("app.experiments", "templates"),
@@ -78,7 +137,9 @@ def _environment() -> jinja2.Environment:
         autoescape=False,  # markdown, not HTML
         extensions=["jinja2.ext.do"],
     )
-    env.filters.update(f=fmt, percent=percent, kappa=kappa, lengths=lengths, mark=VERDICT_MARK.get)
+    env.filters.update(
+        f=fmt, percent=percent, kappa=kappa, lengths=lengths, mark=VERDICT_MARK.get, stdev=stdev
+    )
     env.globals.update(
         row=row,
         header=header,
@@ -90,10 +151,21 @@ def _environment() -> jinja2.Environment:
         SEED_PERTURBATION=SEED_PERTURBATION,
         KAPPA_SINGULAR=KAPPA_SINGULAR,
         LANDING_ERROR_CLEAN=LANDING_ERROR_CLEAN,
+        DISTURBANCE=DISTURBANCE,
+        DISTURBANCE_PERIOD=DISTURBANCE_PERIOD,
+        SIGNIFICANCE=SIGNIFICANCE,
+        zmp_margin=_P.com.zmp_margin,
+        lateral_floor=_P.pelvis.lateral_floor,
+        step_width=_P.walk.step_width,
+        joint_groups=joint_groups,
     )
     return env
 
 
 def render(study: Study, results: StudyResults) -> str:
     """The whole report as markdown."""
-    return _environment().get_template("report.md.j2").render(study=study, r=results)
+    return (
+        _environment()
+        .get_template("report.md.j2")
+        .render(study=study, r=results, energy_note=energy_note(results))
+    )

@@ -16,12 +16,15 @@ import dataclasses
 import json
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from app.experiments.definitions import RunSpec
 from app.experiments.paper import KinematicLimits
+
+if TYPE_CHECKING:
+    from app.experiments.results_more import BalanceSection, LateralSection, SensitivitySection
 
 Samples = list[float | None]  # a series as JSON-safe floats (None = NaN / inf)
 
@@ -75,6 +78,8 @@ class RunSummary:
     sim_time: float  # [s]
     kappa_liftoff: Samples  # max kappa(J) within +/- 50 ms of each walking step's lift-off
     kappa_landing: Samples  # ... and of each landing
+    kappa_legs_liftoff: Samples = field(default_factory=list)  # the same, leg columns
+    kappa_legs_landing: Samples = field(default_factory=list)
     other: dict[str, Any] = field(default_factory=dict)
 
     @classmethod
@@ -214,6 +219,10 @@ class MaxStep:
     clean_again_above_first_failure: list[float]
     binding_at_first_failure: SweepPoint | None
     points: list[SweepPoint]
+    # the longest step that *walks* (no fall, every landing within 2 cm) and the first that
+    # does not, from the same runs
+    walks_limit: float | None = None
+    walks_first_failed: float | None = None
 
 
 @dataclass(frozen=True)
@@ -307,6 +316,10 @@ class EnergyCell:
     paper_mean: float | None
     paper_std: float | None
     paper_dash: bool  # the paper has "—" (the method could not walk the length)
+    run_means: list[float] = field(default_factory=list)  # [J] each repeat's mean window
+    mean_substep: float | None = None  # [J] the same windows from every 1 ms substep
+    std_substep: float | None = None
+    per_joint_mean: list[float] = field(default_factory=list)  # [J] mean window, per joint
 
 
 @dataclass(frozen=True)
@@ -315,6 +328,14 @@ class EnergySection:
     lengths: list[float]
     repeats: int
     steps: int
+    # Welch's t-test over the repeats' means: "<length>:<a>-<b>" -> p-value
+    p_values: dict[str, float] = field(default_factory=dict)
+    joints: list[str] = field(default_factory=list)  # per_joint_mean's order
+
+    def p_value(self, x: float, a: str, b: str) -> float | None:
+        return self.p_values.get(
+            f"{length_key(x)}:{a}-{b}", self.p_values.get(f"{length_key(x)}:{b}-{a}")
+        )
 
     def cell(self, method: str, x: float) -> EnergyCell | None:
         """The cell where we measured a mean, else None."""
@@ -337,6 +358,10 @@ class KappaCase:
     kappa_landing_mid_step: float | None
     kappa_step_peak: float | None
     kappa_run_max: float
+    # the same on the 12 leg columns (the clean criterion's figure)
+    kappa_legs_run_max: float | None = None
+    kappa_legs_landing_median: float | None = None
+    kappa_legs_liftoff_median: float | None = None
 
 
 @dataclass(frozen=True)
@@ -401,6 +426,8 @@ class Meta:
     machine: str
     errors: dict[str, str]
     full_estimate_s: float | None = None
+    study_s: float | None = None  # [s] the study's runs alone (before the sensitivity section)
+    load_average: float | None = None  # the machine's 1-minute load average at the end
 
 
 @dataclass(frozen=True)
@@ -426,6 +453,9 @@ class StudyResults:
     energy: EnergySection
     kappa: KappaSection
     zmp: ZmpSection
+    lateral: LateralSection | None = None
+    balance: BalanceSection | None = None
+    sensitivity: SensitivitySection | None = None
     claims: list[ClaimResult] = field(default_factory=list)
     runs: dict[str, RunRecord] = field(default_factory=dict)
     figures: dict[str, str] = field(default_factory=dict)  # name -> file in figures/

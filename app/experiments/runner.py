@@ -24,7 +24,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
-from app.experiments import claims, sections
+from app.experiments import claims, sections, sections_more
 from app.experiments.definitions import (
     FULL,
     QUICK,
@@ -34,6 +34,7 @@ from app.experiments.definitions import (
     refinement_runs,
 )
 from app.experiments.results import Meta, Results, RunRecord, StudyResults, to_json
+from app.experiments.results_more import SensitivitySection
 from app.experiments.worker import execute
 
 
@@ -98,7 +99,9 @@ def estimate_full_seconds(results: Results, jobs: int) -> float | None:
     return rate * sim / max(jobs, 1)
 
 
-def analyse(study: Study, results: Results, meta: Meta) -> StudyResults:
+def analyse(
+    study: Study, results: Results, meta: Meta, sens: SensitivitySection | None = None
+) -> StudyResults:
     """Every section's numbers, the claims' verdicts, and every run's summary."""
     ms = sections.max_step(study, results)
     out = StudyResults(
@@ -111,6 +114,9 @@ def analyse(study: Study, results: Results, meta: Meta) -> StudyResults:
         energy=sections.energy(study, results),
         kappa=sections.kappa(study, results, ms),
         zmp=sections.zmp(study, results),
+        lateral=sections_more.lateral(study, results, sens),
+        balance=sections_more.balance(study, results),
+        sensitivity=sens,
         runs={
             s.key: RunRecord(s, r.wall_s, r.error, r.summary.as_dict() if r.summary else None)
             for s, r in sorted(results.items(), key=lambda kv: kv[0].key)
@@ -131,6 +137,8 @@ def main(out: Path, quick: bool = False, jobs: int | None = None) -> int:
     started = datetime.now(UTC)
     t0 = time.perf_counter()
     results, _ = run_study(study, jobs)
+    study_s = time.perf_counter() - t0
+    sens = sections_more.run_sensitivity(study, jobs)
     meta = Meta(
         command="pelvic-walk experiments --out {} {}--jobs {}".format(
             out, "--quick " if quick else "", jobs
@@ -140,13 +148,15 @@ def main(out: Path, quick: bool = False, jobs: int | None = None) -> int:
         duration_s=time.perf_counter() - t0,
         run_seconds_total=sum(r.wall_s for r in results.values()),
         n_runs=len(results),
+        study_s=study_s,
         jobs=jobs,
         cpu_count=os.cpu_count(),
         machine=f"{platform.machine()}, {platform.python_implementation()} "
         f"{platform.python_version()}",
         errors={s.key: r.error for s, r in results.items() if r.error},
+        load_average=os.getloadavg()[0],
     )
-    data = analyse(study, results, meta)
+    data = analyse(study, results, meta, sens)
     data = dataclasses.replace(
         data, figures=figures.make_all(study, results, data, out / "figures")
     )
@@ -156,7 +166,10 @@ def main(out: Path, quick: bool = False, jobs: int | None = None) -> int:
     )
     write(out, study, data)
     record_report_dir(out)  # what `pelvic-walk serve` shows at /report
-    print(f"wrote {out / 'report.md'} ({len(results)} runs, {data.meta.duration_s:.0f} s)")
+    print(
+        f"wrote {out / 'report.md'} ({len(results)} runs + {sens.n_runs} sensitivity runs, "
+        f"{data.meta.duration_s:.0f} s)"
+    )
     return 0 if not meta.errors else 1
 
 

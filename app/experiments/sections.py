@@ -53,6 +53,7 @@ from app.experiments.results import (
     length_key,
 )
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from app.sweep.measure import walks
 from controller.params import CONTROL_DT
 
 DEG = 180.0 / math.pi
@@ -173,6 +174,13 @@ def max_step(study: Study, results: Results) -> dict[str, MaxStep]:
             for x in figure_lengths_run(study, results, m)
         ]
         longest, first_failed = sweep_bracket({p.step_length: p.clean for p in points})
+        sums = {
+            x: summary_of(results, study.figure_run(m, x))
+            for x in figure_lengths_run(study, results, m)
+        }
+        walks_limit, walks_failed = sweep_bracket(
+            {x: bool(s and walks(s.as_dict())) for x, s in sums.items()}
+        )
         out[m] = MaxStep(
             paper=paper.MAX_STEP[m],
             longest_clean=longest,
@@ -193,6 +201,8 @@ def max_step(study: Study, results: Results) -> dict[str, MaxStep]:
                 (p for p in points if p.step_length == first_failed), None
             ),
             points=points,
+            walks_limit=walks_limit,
+            walks_first_failed=walks_failed,
         )
     return out
 
@@ -307,6 +317,12 @@ def energy(study: Study, results: Results) -> EnergySection:
             sums = [summary_of(results, s) for s in study.energy_runs(m, x)]
             ok = [s for s in sums if s and not s.fell]
             windows = [w for s in ok for w in s.energy_two_step_windows]
+            substep = [w for s in ok for w in s.other.get("energy_two_step_windows_substep", [])]
+            joints = [
+                s.other["energy_two_step_per_joint_mean"]
+                for s in ok
+                if s.other.get("energy_two_step_per_joint_mean")
+            ]
             theirs = paper.TABLE1.get(m, {}).get(x)
             table[m][length_key(x)] = EnergyCell(
                 mean=float(np.mean(windows)) if windows else None,
@@ -318,14 +334,56 @@ def energy(study: Study, results: Results) -> EnergySection:
                 paper_mean=theirs.mean if theirs else None,
                 paper_std=theirs.std if theirs else None,
                 paper_dash=theirs is None,
+                run_means=[
+                    float(np.mean(s.energy_two_step_windows))
+                    for s in ok
+                    if s.energy_two_step_windows
+                ],
+                mean_substep=float(np.mean(substep)) if substep else None,
+                std_substep=float(np.std(substep)) if substep else None,
+                per_joint_mean=np.mean(joints, axis=0).tolist() if joints else [],
             )
+    p_values = {}
+    for x in study.energy_lengths:
+        cells = {m: table[m][length_key(x)] for m in study.methods}
+        for i, a in enumerate(study.methods):
+            for b in study.methods[i + 1 :]:
+                p = welch_p(cells[a].run_means, cells[b].run_means)
+                if p is not None:
+                    p_values[f"{length_key(x)}:{a}-{b}"] = p
+    from app.sim.world import JOINTS
+
     return EnergySection(
-        table, list(study.energy_lengths), study.energy_repeats, study.energy_steps
+        table,
+        list(study.energy_lengths),
+        study.energy_repeats,
+        study.energy_steps,
+        p_values=p_values,
+        joints=list(JOINTS),
     )
 
 
+SIGNIFICANCE = 0.05  # two means differ when Welch's t-test over the repeats gives p below this
+
+
+def welch_p(a: Sequence[float], b: Sequence[float]) -> float | None:
+    """Welch's t-test p-value of two samples of repeat means (None: fewer than 2 each, or
+    both without spread)."""
+    from scipy import stats
+
+    if len(a) < 2 or len(b) < 2:
+        return None
+    if np.std(a) == 0 and np.std(b) == 0:
+        return 0.0 if np.mean(a) != np.mean(b) else 1.0
+    return float(stats.ttest_ind(a, b, equal_var=False).pvalue)
+
+
 def significant(a: EnergyCell, b: EnergyCell) -> bool:
-    """Two means differ by at least twice the standard error of their difference."""
+    """The repeats' means differ (Welch's t-test, p < SIGNIFICANCE); with fewer than two
+    repeats, by at least twice the standard error of the windows' means."""
+    p = welch_p(a.run_means, b.run_means)
+    if p is not None:
+        return p < SIGNIFICANCE
     se = math.sqrt(a.std**2 / max(a.n_windows, 1) + b.std**2 / max(b.n_windows, 1))
     return abs(a.mean - b.mean) >= 2 * se
 
@@ -350,6 +408,9 @@ def kappa_case(study: Study, results: Results, m: str, x: float) -> KappaCase | 
         kappa_landing_mid_step=mid,
         kappa_step_peak=float(np.nanmax(array(ex.kappa))) if ex and ex.kappa else None,
         kappa_run_max=s.condition_number_max,
+        kappa_legs_run_max=s.other.get("condition_number_legs_max"),
+        kappa_legs_landing_median=_median(s.kappa_legs_landing[1:]),
+        kappa_legs_liftoff_median=_median(s.kappa_legs_liftoff[1:]),
     )
 
 

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from app.experiments.definitions import RunSpec
+from app.experiments.definitions import DISTURBANCE_PERIOD, RunSpec
 from app.experiments.results import (
     Extracts,
     RunResult,
@@ -137,7 +137,14 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
     start = time.perf_counter()
     params = spec.params()
     try:
-        session = run(RunConfig(params=params, seed=spec.seed, perturbation=spec.perturbation))
+        cfg = RunConfig(
+            params=params,
+            seed=spec.seed,
+            perturbation=spec.perturbation,
+            disturbance=spec.disturbance,
+            disturbance_period=DISTURBANCE_PERIOD,
+        )
+        session = run(cfg)
     except Exception as exc:  # a crashed run is reported, never hides the others
         return RunResult(
             spec, None, error=f"{type(exc).__name__}: {exc}", wall_s=time.perf_counter() - start
@@ -146,8 +153,9 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
     plan = session.walker.plan
     series = session.series
     t = series.column("t")
-    kappa = np.minimum(
-        np.nan_to_num(series.column("kappa"), nan=np.nan, posinf=KAPPA_CAP), KAPPA_CAP
+    kappa, kappa_legs = (
+        np.minimum(np.nan_to_num(series.column(c), nan=np.nan, posinf=KAPPA_CAP), KAPPA_CAP)
+        for c in ("kappa", "kappa_legs")
     )
     n_walk = plan.n_walking_steps
     lift = plan.step_start[:n_walk] + plan.step_dsp[:n_walk]
@@ -180,6 +188,8 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
             summary,
             kappa_liftoff=_event_peaks(t, kappa, lift),
             kappa_landing=_event_peaks(t, kappa, land),
+            kappa_legs_liftoff=_event_peaks(t, kappa_legs, lift),
+            kappa_legs_landing=_event_peaks(t, kappa_legs, land),
         ),
         out,
         wall_s=time.perf_counter() - start,

@@ -36,6 +36,10 @@ class RunConfig:
     params: ControllerParams = field(default_factory=ControllerParams)
     seed: int | None = None
     perturbation: float = 0.0  # [rad] std of the seeded initial perturbation (arms, base vel)
+    # A seeded disturbance that lasts the whole run (needs a seed): a horizontal force on the
+    # torso, each axis drawn from N(0, disturbance) [N] and held for disturbance_period [s].
+    disturbance: float = 0.0  # [N]
+    disturbance_period: float = 0.1  # [s]
     sim_dt: float = 0.001  # [s] MuJoCo timestep
     backend: str = "daqp"  # QP back-end of every layer (daqp exact / osqp)
     settle_time: float = 0.3  # [s] after a fall before a headless run stops
@@ -75,6 +79,14 @@ class Session:
         self.kin = RobotKinematics(ROBOT_XML)
         self.world = World(cfg.sim_dt, params.control_dt)
         self.world.reset(cfg.seed, cfg.perturbation)
+        # the disturbance's own stream (the reset's draws do not shift it)
+        self._disturb_rng = (
+            np.random.default_rng((cfg.seed, 1))
+            if cfg.seed is not None and cfg.disturbance > 0
+            else None
+        )
+        self._disturb_every = max(1, int(round(cfg.disturbance_period / params.control_dt)))
+        self._ticks = 0
         q0 = self.world.keyframe_joints()
         self.walker = Walker(
             params,
@@ -127,6 +139,10 @@ class Session:
         w, world, clock, split = self.walker, self.world, time.perf_counter, self.time_split
         wall0 = clock()
         q_meas = world.q_joints()
+        if self._disturb_rng is not None and self._ticks % self._disturb_every == 0:
+            force = self._disturb_rng.normal(0.0, self.cfg.disturbance, 2)
+            world.push(force, self.cfg.disturbance_period)
+        self._ticks += 1
         t0 = clock()
         out = w.tick(q_meas)
         t1 = clock()

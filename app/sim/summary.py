@@ -130,6 +130,11 @@ def summarize(session: Session) -> dict[str, Any]:
         ),
         "energy_two_step_windows_substep": windows_substep.tolist(),
         "condition_number_legs_max": kappa_legs_max,
+        # the whole run: eq. (44) at 200 Hz and at 1 ms, and the net work [J]
+        "energy_total": float(world.energy_ctrl_per_joint.sum()),
+        "energy_total_substep": float(world.energy_substep_per_joint.sum()),
+        "work_net_total": float(world.work_net),
+        "work_net_total_ctrl": float(world.work_net_ctrl),
         "balance_margin_min": float(np.min(margin)) if len(margin) else None,
         "balance_margin_p5": float(np.percentile(margin, 5)) if len(margin) else None,
         "sole_tilt_max_deg": float(np.max(tilt) * DEG) if len(tilt) else None,

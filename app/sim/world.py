@@ -10,7 +10,9 @@ ways, per joint:
 - ``energy_ctrl_per_joint``: from one sample of torque and speed per control period (200 Hz),
   as a robot logs them: the figure the study and the live plots report (SPEC.md section 5);
 - ``energy_substep_per_joint``: from every MuJoCo substep (1 ms), which also counts the servo
-  chatter inside a control period: reported beside it.
+  chatter inside a control period: reported beside it;
+- ``work_net``: the net work (torque x speed with its sign, every substep, all joints), the
+  yardstick of how much of either figure is chatter that does no work.
 (The per-substep torques and rates are copied into preallocated buffers; the arithmetic is
 done once per control period.)
 
@@ -100,6 +102,8 @@ class World:
         mujoco.mj_forward(self.model, self.data)
         self.energy_ctrl_per_joint = np.zeros(len(JOINTS))  # [J] eq. (44) from 200 Hz samples
         self.energy_substep_per_joint = np.zeros(len(JOINTS))  # [J] eq. (44) at every substep
+        self.work_net = 0.0  # [J] torque x speed summed with its sign, every substep, all joints
+        self.work_net_ctrl = 0.0  # [J] the same from one sample per control period (200 Hz)
         self.saturated_substeps = 0
         self.data.xfrc_applied[:] = 0.0
         self._push_left = 0  # substeps the current push still lasts
@@ -179,6 +183,8 @@ class World:
         e[0] = self.energy_substep_per_joint
         np.maximum(tau * qd * self.sim_dt, 0.0, out=e[1:])
         self.energy_substep_per_joint[:] = np.add.accumulate(e, axis=0)[-1]
+        self.work_net += float(np.einsum("ij,ij->", tau, qd)) * self.sim_dt
+        self.work_net_ctrl += float(tau[-1] @ qd[-1]) * self.control_dt
         # One sample per control period (the state at the tick), as a robot logs it.
         self.energy_ctrl_per_joint += np.maximum(tau[-1] * qd[-1] * self.control_dt, 0.0)
         self.saturated_substeps += int(
