@@ -141,6 +141,7 @@ class Study:
     # default, plus the baseline); its walks have sensitivity_steps steps
     sensitivity: tuple[SensitivityAxis, ...] = ()
     sensitivity_steps: int = 6
+    sensitivity_search: tuple[float, float, float] = (0.10, 0.60, 0.01)  # lo, hi, step [m]
 
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
         """The unseeded run every figure section shares at one (method, length)."""
@@ -180,6 +181,18 @@ FULL = Study(
         (LATERAL, tuple(m for m in LATERAL_MODES if m != _DEFAULT_MODE), ("mpc",)),
     ),
 )
+# The full study made lighter for a shared or slow machine: Table 1 with 3 runs of 6 steps per
+# cell (2 windows each) instead of the paper's 10 x 20, the step-length sweep refined to 0.02 m,
+# and the sensitivity section's limit search over 0.20-0.60 m at 0.02 m with 4-step walks.
+REDUCED = dataclasses.replace(
+    FULL,
+    name="reduced",
+    sweep_resolution=0.02,
+    energy_repeats=3,
+    energy_steps=6,
+    sensitivity_steps=4,
+    sensitivity_search=(0.20, 0.60, 0.02),
+)
 QUICK = Study(
     name="quick",
     n_steps=6,
@@ -193,6 +206,7 @@ QUICK = Study(
     sensitivity_steps=4,
 )
 
+STUDIES: dict[str, Study] = {"full": FULL, "reduced": REDUCED, "quick": QUICK}
 Requests = dict[RunSpec, set[str]]
 
 

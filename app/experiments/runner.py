@@ -28,6 +28,7 @@ from app.experiments import claims, sections, sections_more
 from app.experiments.definitions import (
     FULL,
     QUICK,
+    STUDIES,
     Requests,
     Study,
     planned_runs,
@@ -125,12 +126,12 @@ def analyse(
     return dataclasses.replace(out, claims=claims.evaluate(study, out))
 
 
-def main(out: Path, quick: bool = False, jobs: int | None = None) -> int:
-    """Run the study (``quick``: reduced) and write results.json, figures/ and report.md."""
-    from app.experiments import figures
-    from app.report_dir import record_report_dir
-
-    study = QUICK if quick else FULL
+def main(
+    out: Path, quick: bool = False, jobs: int | None = None, study_name: str | None = None
+) -> int:
+    """Run the study (``quick``: the smoke set; ``study_name``: one of
+    :data:`definitions.STUDIES`) and write results.json, figures/ and report.md."""
+    study = STUDIES[study_name] if study_name else (QUICK if quick else FULL)
     jobs = jobs or os.cpu_count() or 1
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -139,10 +140,32 @@ def main(out: Path, quick: bool = False, jobs: int | None = None) -> int:
     results, _ = run_study(study, jobs)
     study_s = time.perf_counter() - t0
     sens = sections_more.run_sensitivity(study, jobs)
-    meta = Meta(
-        command="pelvic-walk experiments --out {} {}--jobs {}".format(
+    if study_name:
+        command = f"python -m app.experiments.runner --out {out} --study {study.name} --jobs {jobs}"
+    else:
+        command = "pelvic-walk experiments --out {} {}--jobs {}".format(
             out, "--quick " if quick else "", jobs
-        ),
+        )
+    return finish(out, study, results, sens, command, started, t0, study_s, jobs)
+
+
+def finish(
+    out: Path,
+    study: Study,
+    results: Results,
+    sens: SensitivitySection,
+    command: str,
+    started: datetime,
+    t0: float,
+    study_s: float,
+    jobs: int,
+) -> int:
+    """Analyse finished runs, draw the figures, write results.json and report.md."""
+    from app.experiments import figures
+    from app.report_dir import record_report_dir
+
+    meta = Meta(
+        command=command,
         study=study.name,
         date_utc=started.strftime("%Y-%m-%d %H:%M UTC"),
         duration_s=time.perf_counter() - t0,
@@ -179,3 +202,17 @@ def write(out: Path, study: Study, data: StudyResults) -> None:
 
     (out / "results.json").write_text(to_json(data))
     (out / "report.md").write_text(report.render(study, data))
+
+
+if __name__ == "__main__":
+    import argparse
+
+    parser = argparse.ArgumentParser(
+        prog="python -m app.experiments.runner",
+        description="the study, as `pelvic-walk experiments`, with a choice of study",
+    )
+    parser.add_argument("--out", type=Path, default=Path("report"))
+    parser.add_argument("--study", choices=sorted(STUDIES), default="full")
+    parser.add_argument("--jobs", type=int, default=None)
+    args = parser.parse_args()
+    sys.exit(main(args.out, jobs=args.jobs, study_name=args.study))

@@ -139,19 +139,20 @@ def run_sensitivity(study: Study, jobs: int) -> SensitivitySection:
     """The limit search of every sensitivity cell on a local process pool (``app.sweep``)."""
     import time
 
-    from app.sweep.measure import RESOLUTION, SEARCH_MAX, SEARCH_MIN, LimitTask
+    from app.sweep.measure import LimitSearch, LimitTask
     from app.sweep.run import InProcess, LocalPool, execute
 
     cells = sensitivity_cells(study)
+    lo, hi, step = study.sensitivity_search
     section = SensitivitySection(
         n_steps=study.sensitivity_steps,
-        resolution=RESOLUTION,
-        search=(SEARCH_MIN, SEARCH_MAX),
+        resolution=step,
+        search=(lo, hi),
         defaults=sensitivity_defaults(study),
     )
     if not cells:
         return section
-    tasks = [LimitTask(cell, m) for _, _, m, cell in cells]
+    tasks = [LimitTask(cell, m, LimitSearch(lo, hi, step)) for _, _, m, cell in cells]
     t0 = time.perf_counter()
     backend = LocalPool(min(jobs, len(tasks))) if jobs > 1 else InProcess()
     try:
