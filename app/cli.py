@@ -117,6 +117,13 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--backend", choices=("osqp", "daqp"), default="daqp")
     p.add_argument("--json", type=Path, default=None, help="write the summary here")
     p.add_argument("--csv", type=Path, default=None, help="write the time series here")
+    p.add_argument(
+        "--record",
+        type=Path,
+        default=None,
+        help="write a recording of the run that plays back without the server: "
+        "PATH.zip, or else a folder (open its index.html in a browser)",
+    )
 
     p = sub.add_parser("analyze", help="the kinematic analysis of eq. (1)-(5)")
     p.add_argument("--json", type=Path, default=None)
@@ -162,7 +169,12 @@ def _simulate(args: argparse.Namespace) -> int:
         perturbation=0.01 if args.seed is not None else 0.0,
         backend=args.backend,
     )
-    session = run(cfg)
+    recorder = None
+    if args.record:
+        from app.web.recording import HeadlessRecorder
+
+        recorder = HeadlessRecorder(params.method)
+    session = run(cfg, on_tick=recorder.capture if recorder else None)
     summary = session.summary()
     ok = "success" if summary["success"] else ("FELL" if summary["fell"] else "incomplete")
     le = summary["landing_error_max"]
@@ -182,7 +194,22 @@ def _simulate(args: argparse.Namespace) -> int:
         args.json.write_text(json.dumps(summary, indent=2))
     if args.csv:
         session.series.to_csv(str(args.csv))
+    if recorder is not None:
+        _write_recording(recorder, args)
     return 0
+
+
+def _write_recording(recorder, args: argparse.Namespace) -> None:
+    """``simulate --record``: the whole run as a zip or a folder (by the path's extension)."""
+    from app.web import recording
+
+    source = f"headless run (pelvic-walk simulate --method {args.method})"
+    try:
+        path = recording.write(recorder.recording(source), args.record)
+    finally:
+        recording.shutdown()
+    size = sum(f.stat().st_size for f in [path, *path.rglob("*")] if f.is_file())
+    print(f"recording: {path} ({size / 1e6:.1f} MB); open index.html in a browser")
 
 
 def _analyze(args: argparse.Namespace) -> int:
@@ -198,10 +225,15 @@ def _analyze(args: argparse.Namespace) -> int:
 
 def _check_output_paths(args: argparse.Namespace) -> str | None:
     """A one-line complaint if an output file cannot be written (checked before any run)."""
-    for flag in ("json", "csv"):
+    for flag in ("json", "csv", "record"):
         path = getattr(args, flag, None)
         if path is None:
             continue
+        if flag == "record" and path.suffix.lower() != ".zip":  # a folder, made if need be
+            if path.exists() and not path.is_dir():
+                return f"--record {path}: is a file, not a folder (or name it .zip)"
+            if path.is_dir():
+                path = path / "index.html"
         parent = path.resolve().parent
         if not parent.is_dir():
             return f"--{flag} {path}: folder {parent} does not exist"

@@ -29,6 +29,7 @@ from app.web.learn_gui import LearnTab
 from app.web.lessons import PRESETS, warnings_for
 from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
+from app.web.record_gui import RecordFolder
 from app.web.scene import LAYERS
 from controller.params import GROUP_TITLES, GROUPS, METHOD_INFO, METHODS, ControllerParams, spec
 
@@ -168,6 +169,7 @@ class ControlPanel:
                 box = gui.add_checkbox(label, default)
                 box.on_update(lambda _e, key=key: self._layer_changed(key))
                 self.layer_boxes[key] = box
+        self.record = RecordFolder(gui, self)
 
     def _add_param(self, group: str, name: str, meta: dict[str, Any], value: Any) -> None:
         gui = self.gui

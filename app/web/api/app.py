@@ -15,6 +15,7 @@ from app.report_dir import latest_report_dir
 from app.web.api.edges import finite, router, validation_handler
 from app.web.api.live import session_router
 from app.web.api.pages import mount_docs_assets, pages_router
+from app.web.api.recording import recording_router
 from app.web.api.runs import RunManager, runs_router
 from app.web.api.sessions import resolvers, sessions_router
 from controller.params import GROUPS, ControllerParams, spec
@@ -96,6 +97,8 @@ def create_app(
         session_router("/api", by_header),
         sessions_router(registry),
         session_router("/api/sessions/{sid}", by_path),
+        recording_router("/api", by_header),
+        recording_router("/api/sessions/{sid}", by_path),
         runs_router(runs),
         pages_router(app, viser_port, reports),
     ):

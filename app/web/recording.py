@@ -1,0 +1,351 @@
+"""Recordings that play back without the server: the 3-D scene, the plots and the numbers.
+
+A :class:`Recording` is a list of published :class:`~app.live.LiveFrame` objects and the plot
+rows of the same window (``app.live.history.ROW_COLUMNS``). It is made from what a live
+session already keeps in the web process (:func:`from_session`: its FrameStore and plot
+history; the simulation is never paused or stepped for it) or captured during a headless run
+(:class:`HeadlessRecorder`, ``pelvic-walk simulate ... --record PATH``).
+
+It is written as (:func:`package`):
+
+- ``scene.html``: the scene as the live page draws it (:class:`~app.web.scene.SceneView`),
+  recorded by viser's scene serializer with one sleep per frame and embedded, with viser's
+  client taken from the installed package at record time, in one self-contained page (no
+  server, no internet: the client build inlines its scripts, styles and assets);
+- ``timeseries.csv``: the plot rows of every robot (one tidy table);
+- ``plots.png``: the live plots of the same window (matplotlib; viser recordings drop GUI
+  plots), drawn by :mod:`app.web.record_plots`;
+- ``index.html``: a page that shows them together, and ``README.txt``
+  (:mod:`app.web.record_page`).
+
+Scenes are drawn into one viser server of this process that nobody connects to (bound to
+127.0.0.1 on a free port), one recording at a time.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import csv
+import dataclasses
+import html
+import io
+import math
+import threading
+import time
+import zipfile
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from app.live.frames import LiveFrame, robot_frame
+from app.live.history import HISTORY_DECIMATION, ROW_COLUMNS
+from app.live.session import KEEP_S, SessionView
+from app.web.record_page import README, index_html, title
+from controller.params import ControllerParams
+
+RECORD_HZ = 20.0  # scene frames per second of simulated time (the display rate)
+FORMATS = ("zip", "html", "csv", "png")  # what GET /api/recording can return
+MEDIA_TYPES = {"zip": "application/zip", "html": "text/html", "csv": "text/csv", "png": "image/png"}
+BUSY_WAIT_S = 20.0  # [s] a recording waits this long for the one being made, then gives up
+SLACK_S = 0.1  # [s] a request this much longer than what is kept is still granted
+
+
+class RecorderBusy(RuntimeError):
+    """Another recording is being drawn for too long (the caller may try again)."""
+
+
+@dataclass(frozen=True)
+class Recording:
+    """Frames of the scene and plot rows of one window of simulated time."""
+
+    frames: tuple[LiveFrame, ...]  # oldest first, at most RECORD_HZ per simulated second
+    rows: dict[str, np.ndarray]  # method -> (n, len(ROW_COLUMNS)) plot rows of the window
+    source: str  # what was recorded, for the page ("live session", "simulate ...")
+    created: float = field(default_factory=time.time)
+
+    @property
+    def methods(self) -> tuple[str, ...]:
+        return tuple(r.method for r in self.frames[-1].robots)
+
+    @property
+    def start(self) -> float:
+        return self.frames[0].clock
+
+    @property
+    def duration(self) -> float:
+        return self.frames[-1].clock - self.frames[0].clock
+
+    @property
+    def params(self) -> ControllerParams:
+        return self.frames[-1].robots[0].params
+
+    @property
+    def name(self) -> str:
+        """A file name stem: ``pelvic-walk-recording-YYYYmmdd-HHMMSS``."""
+        stamp = time.strftime("%Y%m%d-%H%M%S", time.localtime(self.created))
+        return f"pelvic-walk-recording-{stamp}"
+
+
+def decimate(frames: Sequence[LiveFrame], hz: float = RECORD_HZ) -> tuple[LiveFrame, ...]:
+    """Frames at least 1/hz of simulated time apart, the newest always kept."""
+    kept: list[LiveFrame] = []
+    for f in frames:
+        if not kept or f.clock - kept[-1].clock >= 1.0 / hz - 1e-9:
+            kept.append(f)
+    if frames and kept[-1] is not frames[-1]:
+        kept.append(frames[-1])
+    return tuple(kept)
+
+
+def check_seconds(seconds: float, kept: float) -> None:
+    """ValueError with a readable message unless 0 < seconds <= what is kept [s]."""
+    if not math.isfinite(seconds) or seconds <= 0:
+        raise ValueError(f"seconds must be a positive number, got {seconds}")
+    if seconds > kept + SLACK_S:
+        raise ValueError(
+            f"only {kept:.1f} s of this session are kept now (at most {KEEP_S:g} s; less "
+            f"after a restart): ask for at most that, got {seconds:g} s"
+        )
+
+
+def _kept_window(session: SessionView) -> tuple[float, float] | None:
+    """(oldest kept, shown) session clock: what a recording may cover now, or None."""
+    shown = session.shown_frame()
+    span = session.frames.span()
+    if shown is None or span is None:
+        return None
+    return span[0], min(shown.clock, span[1])
+
+
+def kept_seconds(session: SessionView) -> float:
+    """[s] the longest recording the session can make now (up to the instant shown)."""
+    window = _kept_window(session)
+    return window[1] - window[0] if window else 0.0
+
+
+def from_session(session: SessionView, seconds: float) -> Recording:
+    """The last ``seconds`` up to the instant shown (the present, or the sought one while
+    paused), from the session's kept frames and plot rows; ValueError if that much is not
+    kept. Only reads what the displays read: the live loop runs on undisturbed."""
+    window = _kept_window(session)
+    if window is None:
+        raise ValueError("nothing is kept yet: wait for the robots to start")
+    end = window[1]
+    check_seconds(seconds, end - window[0])
+    frames = session.frames.between(end - seconds, end)
+    if not frames:
+        raise ValueError("nothing is kept in that window")
+    methods = tuple(r.method for r in frames[-1].robots)
+    frames = [f for f in frames if tuple(r.method for r in f.robots) == methods]
+    start = frames[0].clock
+    window = session.history.window(end - start, until=end)
+    rows = {m: window.rows[m] for m in methods if m in window.rows}
+    return Recording(decimate(frames), rows, "live session")
+
+
+class HeadlessRecorder:
+    """Captures a headless run for a recording: pass :meth:`capture` as ``run``'s
+    ``on_tick``. Frames at ``hz`` and plot rows at 50 Hz, as a live session keeps them."""
+
+    def __init__(self, method: str, hz: float = RECORD_HZ):
+        self.method = method
+        self.period = 1.0 / hz
+        self.frames: list[LiveFrame] = []
+        self.rows: list[np.ndarray] = []
+        self._ticks = 0
+        self._energy: tuple[int, float] = (-1, math.nan)
+
+    def capture(self, session) -> None:
+        """After every control tick of ``session`` (an ``app.sim.session.Session``)."""
+        self._ticks += 1
+        t = float(session.t)
+        if self._ticks % HISTORY_DECIMATION == 0:
+            self.rows.append(self._row(session, t))
+        if not self.frames or t - self.frames[-1].clock >= self.period - 1e-9:
+            robot = robot_frame(session, 0, t, self.method, int(session.fell), 0, None, False, None)
+            self.frames.append(
+                LiveFrame(
+                    seq=len(self.frames),
+                    clock=t,
+                    paused=False,
+                    speed=1.0,
+                    realtime_factor=None,
+                    compute_realtime_factor=None,
+                    intent_version=0,
+                    steps_done=0,
+                    pushes_done=0,
+                    robots=(robot,),
+                )
+            )
+
+    def _row(self, session, t: float) -> np.ndarray:
+        out, m = session.last, session.measured
+        key = len(session.energy_at_step_start)
+        if key != self._energy[0]:
+            windows = session.energy_windows()
+            self._energy = (key, float(windows[-1].sum()) if len(windows) else math.nan)
+        walking = 0 <= out.step_index < session.plan.n
+        return np.array(
+            [
+                t,
+                t,
+                math.degrees(m.waist_angle),
+                math.degrees(out.waist_rate),
+                m.yaw_momentum,
+                out.kappa_legs,
+                self._energy[1],
+                (0.0 if out.in_ssp else 1.0) if walking else math.nan,
+                out.step_index,
+                float(session.fell),
+            ]
+        )
+
+    def recording(self, source: str) -> Recording:
+        if not self.frames:
+            raise ValueError("the run produced no frame")
+        rows = np.array(self.rows).reshape(-1, len(ROW_COLUMNS))
+        return Recording(tuple(self.frames), {self.method: rows}, source)
+
+
+# -- the scene ------------------------------------------------------------------------------
+_lock = threading.Lock()
+_server = None
+_model = None
+
+
+def _recorder():
+    """The viser server scenes are drawn into (created on first use; quiet)."""
+    global _server, _model
+    if _server is None:
+        import mujoco
+        import viser
+
+        from models.dyros_jet import SCENE_XML
+
+        with contextlib.redirect_stdout(io.StringIO()):  # viser prints a banner
+            _server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+        _model = mujoco.MjModel.from_xml_path(str(SCENE_XML))  # only read for its shapes
+    return _server, _model
+
+
+def shutdown() -> None:
+    """Stop the recorder's viser server (quietly), if one was started."""
+    global _server
+    with _lock:
+        if _server is not None:
+            with contextlib.redirect_stdout(io.StringIO()):
+                _server.stop()
+            _server = None
+
+
+def scene_html(rec: Recording, layers: dict[str, bool] | None = None) -> str:
+    """The recorded scene as one self-contained HTML page (viser's client and the data).
+
+    Raises:
+        RecorderBusy: another recording took the recorder longer than BUSY_WAIT_S.
+    """
+    from app.web.camera import camera_pose
+    from app.web.scene import SceneView
+
+    if not _lock.acquire(timeout=BUSY_WAIT_S):
+        raise RecorderBusy("another recording is being made: try again in a moment")
+    try:
+        server, model = _recorder()
+        server.scene.reset()
+        view = SceneView(server, model)
+        for key, on in (layers or {}).items():
+            if key in view.layers:
+                view.set_layer(key, on)
+        pos, look, up, fov = camera_pose("follow", len(rec.methods), 16 / 9, False)
+        server.initial_camera.position = tuple(pos)
+        server.initial_camera.look_at = tuple(look)
+        server.initial_camera.up = up
+        server.initial_camera.fov = fov
+        serializer = server.get_scene_serializer()
+        try:
+            previous = None
+            for frame in rec.frames:
+                if previous is not None:
+                    serializer.insert_sleep(max(frame.clock - previous, 0.0))
+                previous = frame.clock
+                # drawn as if paused: every frame refreshes the overlays and labels and the
+                # world follows the robots exactly (no smoothing over wall time)
+                view.draw(dataclasses.replace(frame, paused=True))
+            serializer.insert_sleep(1.0 / RECORD_HZ)
+            page = serializer.as_html()
+        except BaseException:
+            serializer.serialize()  # unregister it: it would record every later message
+            raise
+        server.scene.reset()
+    finally:
+        _lock.release()
+    title_tag = f"<title>{html.escape(title(rec))}</title>"
+    return page.replace("<title>Viser</title>", title_tag, 1)
+
+
+# -- numbers and plots ----------------------------------------------------------------------
+def timeseries_csv(rec: Recording) -> str:
+    """The plot rows of every robot: ``method``, ``rec_t`` (seconds into the recording, as
+    the scene's playback bar) and ROW_COLUMNS."""
+    out = io.StringIO()
+    w = csv.writer(out, lineterminator="\n")
+    w.writerow(("method", "rec_t", *ROW_COLUMNS))
+    for method, rows in rec.rows.items():
+        for row in rows:
+            w.writerow((method, f"{row[0] - rec.start:.4f}", *(_num(v) for v in row)))
+    return out.getvalue()
+
+
+def _num(v: float) -> str:
+    return "" if not math.isfinite(v) else f"{v:.6g}"
+
+
+def package(rec: Recording, layers: dict[str, bool] | None = None) -> dict[str, bytes]:
+    """Every file of a recording, by name."""
+    from app.web.record_plots import plots_png
+
+    return {
+        "index.html": index_html(rec).encode(),
+        "scene.html": scene_html(rec, layers).encode(),
+        "plots.png": plots_png(rec),
+        "timeseries.csv": timeseries_csv(rec).encode(),
+        "README.txt": README.encode(),
+    }
+
+
+def render(rec: Recording, fmt: str, layers: dict[str, bool] | None = None) -> bytes:
+    """One format of :data:`FORMATS`: the zip of everything, or one of its files."""
+    from app.web.record_plots import plots_png
+
+    if fmt == "zip":
+        return zip_bytes(rec.name, package(rec, layers))
+    if fmt == "html":
+        return scene_html(rec, layers).encode()
+    if fmt == "csv":
+        return timeseries_csv(rec).encode()
+    if fmt == "png":
+        return plots_png(rec)
+    raise ValueError(f"format must be one of {', '.join(FORMATS)}, got {fmt!r}")
+
+
+def zip_bytes(folder: str, files: dict[str, bytes]) -> bytes:
+    """A zip holding one folder with ``files`` (extracting it gives that folder)."""
+    buf = io.BytesIO()
+    with zipfile.ZipFile(buf, "w", zipfile.ZIP_DEFLATED) as z:
+        for name, data in files.items():  # (the scene's data is zstd already: -20 % here)
+            z.writestr(f"{folder}/{name}", data)
+    return buf.getvalue()
+
+
+def write(rec: Recording, path: Path) -> Path:
+    """Write a recording: ``path`` ending in ``.zip`` gets the zip, else a folder of files."""
+    files = package(rec)
+    if path.suffix.lower() == ".zip":
+        path.write_bytes(zip_bytes(path.stem, files))
+    else:
+        path.mkdir(parents=True, exist_ok=True)
+        for name, data in files.items():
+            (path / name).write_bytes(data)
+    return path

@@ -1,0 +1,197 @@
+"""Recordings (app/web/recording.py): from a live session through ``GET /api/recording`` and
+the Record folder, from a headless run through ``simulate --record``; bad input gets a 422
+(or exit 2) and the live loop runs on. The real-browser playback is test_browser_recording.py.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import zipfile
+from types import SimpleNamespace
+
+import pytest
+from fastapi.testclient import TestClient
+
+from app.cli import main
+from app.live import LiveSim
+from app.live.history import ROW_COLUMNS
+from app.web import recording
+from app.web.api import create_app
+from app.web.recording import check_seconds, decimate, kept_seconds
+from controller.params import ControllerParams
+
+FILES = {"index.html", "scene.html", "timeseries.csv", "plots.png", "README.txt"}
+
+
+@pytest.fixture(scope="module")
+def live():
+    """One robot, short plans, at 4x real time: a few seconds are kept quickly."""
+    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 4}), methods=["mpc"], speed=4.0)
+    sim.start()
+    assert sim.wait_frame(timeout=30) is not None
+    yield sim
+    sim.stop()
+    recording.shutdown()
+    assert sim.error is None
+
+
+@pytest.fixture(scope="module")
+def client(live):
+    app = create_app(live, viser_port=18767)
+    with TestClient(app) as c:
+        yield c
+    app.state.runs.shutdown()
+
+
+def _keep_at_least(live: LiveSim, seconds: float) -> None:
+    """Wait until ``seconds`` of frames and of plot rows are kept (the robots plot nothing
+    while they stand by to start)."""
+
+    def rows_kept() -> float:
+        clock = live.history.window().column("mpc", "clock")
+        return float(clock[-1] - clock[0]) if len(clock) else 0.0
+
+    frame = live.frame()
+    while kept_seconds(live) < seconds or rows_kept() < seconds:
+        frame = live.wait_frame(frame.seq, timeout=30)
+        assert frame is not None, "the live simulation stopped publishing"
+
+
+def _still_running(live: LiveSim) -> None:
+    frame = live.frame()
+    for _ in range(3):
+        frame = live.wait_frame(frame.seq, timeout=30)
+        assert frame is not None
+    assert live.running and live.error is None and not live.intent.paused
+
+
+def test_check_seconds_says_what_is_wrong():
+    check_seconds(5.0, 5.0)
+    check_seconds(5.05, 5.0)  # within the slack of one display frame or two
+    for bad in (0.0, -1.0, math.nan, math.inf):
+        with pytest.raises(ValueError, match="positive"):
+            check_seconds(bad, 5.0)
+    with pytest.raises(ValueError, match=r"only 5\.0 s .* kept"):
+        check_seconds(6.0, 5.0)
+
+
+def test_decimate_keeps_the_rate_and_the_newest():
+    frames = [SimpleNamespace(clock=0.01 * i) for i in range(101)]  # 100 Hz, 1 s
+    kept = decimate(frames, hz=20.0)
+    gaps = [b.clock - a.clock for a, b in zip(kept[:-1], kept[1:], strict=True)]
+    assert min(gaps) >= 0.05 - 1e-9 and kept[0] is frames[0] and kept[-1] is frames[-1]
+    assert len(kept) == 21
+
+
+BAD = {
+    "zero": ("seconds=0", "positive"),
+    "negative": ("seconds=-2", "positive"),
+    "NaN": ("seconds=nan", "positive"),
+    "not a number": ("seconds=ten", "seconds"),
+    "beyond the kept history": ("seconds=1000", "kept"),
+    "unknown format": ("seconds=1&format=gif", "format must be one of zip, html, csv, png"),
+}
+
+
+@pytest.mark.parametrize("query", BAD.values(), ids=BAD.keys())
+def test_bad_requests_get_422_with_a_message(client, live, query):
+    params, words = query
+    for prefix in ("/api", "/api/sessions/shared"):
+        r = client.get(f"{prefix}/recording?{params}")
+        assert r.status_code == 422, r.text
+        assert words in r.json()["detail"]
+    _still_running(live)
+
+
+def test_csv_and_png_of_the_last_seconds(client, live):
+    _keep_at_least(live, 2.5)
+    r = client.get("/api/recording?seconds=2&format=csv")
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"].startswith("text/csv")
+    assert "attachment" in r.headers["content-disposition"]
+    rows = list(csv.reader(io.StringIO(r.text)))
+    assert rows[0] == ["method", "rec_t", *ROW_COLUMNS]
+    body = rows[1:]
+    assert {row[0] for row in body} == {"mpc"}
+    rec_t = [float(row[1]) for row in body]
+    clock = [float(row[2]) for row in body]
+    # the window starts at the first kept frame in it (frames come at the display rate, a
+    # few per simulated second at 4x), the plot rows at 50 Hz from there
+    assert rec_t[0] == pytest.approx(0.0, abs=0.05) and 1.5 <= rec_t[-1] <= 2.05
+    assert all(b > a for a, b in zip(clock[:-1], clock[1:], strict=True))
+    assert len(body) == pytest.approx(rec_t[-1] * 50 + 1, abs=3)
+    r = client.get("/api/recording?seconds=1&format=png")
+    assert r.status_code == 200 and r.content.startswith(b"\x89PNG\r\n\x1a\n")
+    _still_running(live)
+
+
+def test_zip_and_html(client, live):
+    _keep_at_least(live, 1.5)
+    r = client.get("/api/recording?seconds=1.5")  # zip is the default
+    assert r.status_code == 200, r.text
+    assert r.headers["content-type"] == "application/zip"
+    with zipfile.ZipFile(io.BytesIO(r.content)) as z:
+        names = z.namelist()
+        folder = names[0].split("/")[0]
+        assert {n.split("/", 1)[1] for n in names} == FILES and folder.startswith("pelvic-walk")
+        index = z.read(f"{folder}/index.html").decode()
+        scene = z.read(f"{folder}/scene.html").decode()
+    for name in ("scene.html", "plots.png", "timeseries.csv"):
+        assert name in index
+    assert "__VISER_EMBED_DATA__" in scene and "pelvic-walk recording" in scene
+    r = client.get("/api/sessions/shared/recording?seconds=0.5&format=html")
+    assert r.status_code == 200 and "__VISER_EMBED_DATA__" in r.text
+    rec = recording.from_session(live, 1.0)
+    assert rec.methods == ("mpc",) and 0.7 <= rec.duration <= 1.0
+    _still_running(live)
+
+
+def test_the_record_folder_offers_the_zip(live):
+    import viser
+
+    server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
+    try:
+        _keep_at_least(live, 2.0)
+        view = SimpleNamespace(scene=SimpleNamespace(layers={"labels": False}))
+        from app.web.record_gui import RecordFolder
+
+        folder = RecordFolder(server.gui, SimpleNamespace(session=live, view=view))
+        folder.seconds.value = 1000.0  # beyond what is kept (40 s max; the slider clamps)
+        sent = []
+        data = folder.record(SimpleNamespace(send_file_download=lambda *a: sent.append(a)))
+        assert data is not None and data.startswith(b"PK")
+        assert sent and sent[0][0].endswith(".zip") and sent[0][1] == data
+        assert "Recorded" in folder.result.content and "were kept" in folder.result.content
+        assert not folder.button.disabled
+    finally:
+        server.stop()
+    _still_running(live)
+
+
+def test_simulate_record_writes_the_whole_run(tmp_path, capsys):
+    """To a folder here (the browser test records a zip)."""
+    out = tmp_path / "walk"
+    args = ["simulate", "--method", "fixed", "--step-length", "0.2", "--steps", "1"]
+    assert main([*args, "--step-time", "0.8", "--record", str(out)]) == 0
+    assert "recording:" in capsys.readouterr().out
+    assert {p.name for p in out.iterdir()} == FILES
+    rows = list(csv.reader(io.StringIO((out / "timeseries.csv").read_text())))
+    assert rows[0] == ["method", "rec_t", *ROW_COLUMNS]
+    clock = [float(r[2]) for r in rows[1:]]
+    assert {r[0] for r in rows[1:]} == {"fixed"}
+    assert len(clock) == pytest.approx(clock[-1] * 50, abs=2)  # 50 Hz from the first tick
+    assert max(int(float(r[ROW_COLUMNS.index("step_index") + 2])) for r in rows[1:]) >= 1
+
+
+@pytest.mark.parametrize(
+    "where, says",
+    [("missing/walk.zip", "does not exist"), ("afile", "is a file, not a folder")],
+)
+def test_simulate_record_bad_path_exits_2(tmp_path, capsys, where, says):
+    (tmp_path / "afile").write_text("x")
+    args = ["simulate", "--method", "fixed", "--step-length", "0.2", "--steps", "1"]
+    assert main([*args, "--record", str(tmp_path / where)]) == 2
+    err = capsys.readouterr().err
+    assert says in err and err.count("\n") == 1 and "--record" in err
