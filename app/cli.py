@@ -152,6 +152,20 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="performance figures")
     p.add_argument("--json", type=Path, default=None)
     p.add_argument("--ticks", type=_positive_int, default=600)
+
+    p = sub.add_parser(
+        "push-study",
+        help="the largest sideways push each method survives (bisection, headless)",
+        description="Push the torso for --duration s at mid-single-support of the third "
+        "step; a run recovers when the robot has not fallen by the end of the plan.",
+    )
+    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS))
+    p.add_argument("--step-length", type=_finite, default=0.3, help="[m] (default 0.3)")
+    p.add_argument("--direction", choices=("left", "right", "forward", "back"), default="left")
+    p.add_argument("--duration", type=_finite, default=0.1, help="[s] (default 0.1)")
+    p.add_argument("--force", type=_finite, default=None, help="[N] one push, no bisection")
+    p.add_argument("--jobs", type=_positive_int, default=1)
+    p.add_argument("--json", type=Path, default=None)
     return parser
 
 
@@ -289,6 +303,10 @@ def main(argv: list[str] | None = None) -> int:
             from app.bench import main as bench_main
 
             return bench_main(args.json, ticks=args.ticks)
+        if args.command == "push-study":
+            from app.pushes import main as push_main
+
+            return push_main(args)
     except KeyboardInterrupt:
         return 130
     return 2
