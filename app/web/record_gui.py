@@ -52,8 +52,8 @@ class RecordFolder:
             self.result = gui.add_markdown("")
 
     def record(self, client: Any) -> bytes | None:
-        """Make the recording and send it to ``client`` (a download link appears in its
-        corner); returns the zip, or None with the reason shown in the folder."""
+        """Make the recording and send it to ``client`` (a download link appears at the top
+        left of its scene); returns the zip, or None with the reason shown in the folder."""
         session = self.panel.session
         asked = float(self.seconds.value)
         kept = recording.kept_seconds(session)
@@ -80,6 +80,6 @@ class RecordFolder:
         self.result.content = (
             f"Recorded **{rec.duration:.1f} s** of {len(rec.methods)} robot"
             f"{'s' if len(rec.methods) != 1 else ''}{short}: {len(data) / 1e6:.1f} MB, made "
-            f"in {made:.1f} s. Click the link in the corner to save `{rec.name}.zip`."
+            f"in {made:.1f} s. Save `{rec.name}.zip` with the link at the top left of the scene."
         )
         return data
