@@ -141,6 +141,7 @@ def test_pause_step_and_reset(running):
 def test_params_reach_every_walker_and_methods_rebuild(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"])
     f = sim.wait_applied(sim.update_params(com={"alpha": 2.0}, walk={"step_length": 0.25}))
+    _started(sim)  # a walker takes new parameters on its next tick: after the start delay
     f = _advance(sim)
     for r in f.robots:
         assert r.params.com.alpha == 2.0 and r.params.walk.step_length == 0.25

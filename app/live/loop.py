@@ -212,7 +212,9 @@ class LiveLoop:
                 robot.session.walker.set_params(
                     dataclasses.replace(intent.params, method=robot.method)
                 )
-        if old is None or intent.anchor != old.anchor or intent.paused != old.paused:
+        # a pause or a new speed starts a new measurement; a moved time base (a catch-up after
+        # the loop fell behind) does not: the factor must show the lag, not hide it
+        if old is None or intent.paused != old.paused or intent.speed != old.speed:
             self._rates = _Rates()
         if not intent.paused:
             self.steps_done = intent.step_requests  # resuming drops pending single steps
@@ -244,13 +246,23 @@ class LiveLoop:
 
     def _single_step(self, intent: Intent) -> None:
         """Advance to the next tick, lift-off or landing of the first walking robot."""
+        n_max = int(STEP_UNTIL_MAX_S / intent.params.control_dt)
         ref = self._reference()
-        if intent.step_until == "tick" or ref is None:
+        if ref is None or ref.session.last is None:
+            # Nobody walks yet: through the start delay (or a wait to start in phase) the
+            # robots stand still, and a step that shows nothing would puzzle a student. Tick
+            # until one moves; that is the tick asked for, or the start of the search.
+            if not self._until_moving(intent, n_max) or intent.step_until == "tick":
+                return
+            ref = self._reference()
+            if ref is None:
+                return
+        elif intent.step_until == "tick":
             self._tick_all(intent)
             return
         last = ref.session.last
         was_ssp, step = (last.in_ssp, last.step_index) if last is not None else (False, -1)
-        for _ in range(int(STEP_UNTIL_MAX_S / intent.params.control_dt)):
+        for _ in range(n_max):
             self._tick_all(intent)
             out = ref.session.last
             if ref.fell:
@@ -266,6 +278,15 @@ class LiveLoop:
             ):
                 return
             was_ssp, step = out.in_ssp, out.step_index
+
+    def _until_moving(self, intent: Intent, n_max: int) -> bool:
+        """Tick until some robot's time advances (at most ``n_max`` ticks); True if one did."""
+        before = [r.session.t for r in self.robots.values()]
+        for _ in range(n_max):
+            self._tick_all(intent)
+            if [r.session.t for r in self.robots.values()] != before:
+                return True
+        return False
 
     def _tick_robot(self, robot: _Robot, params: ControllerParams) -> None:
         s = robot.session

@@ -179,6 +179,7 @@ class _Worker:
     ready: threading.Event = field(default_factory=threading.Event)
     codec: FrameCodec = field(default_factory=FrameCodec)
     stopping: bool = False
+    receiver: threading.Thread | None = None
 
     def send(self, message: tuple) -> None:
         with self.lock:
@@ -239,10 +240,21 @@ class WorkerPool:
         cmd_recv.close()
         frm_send.close()
         w = _Worker(index, proc, cmd_send, frm_recv)
-        threading.Thread(
+        w.receiver = threading.Thread(
             target=self._receive, args=(w,), name=f"worker-{index}-frames", daemon=True
-        ).start()
+        )
+        w.receiver.start()
         return w
+
+    def receiver_thread_ids(self) -> set[int]:
+        """Native ids of the threads that receive the workers' frames (and start a
+        replacement when a worker dies, so it must keep the workers' priority)."""
+        with self._lock:
+            return {
+                w.receiver.native_id
+                for w in self._workers
+                if w.receiver is not None and w.receiver.native_id is not None
+            }
 
     def _receive(self, w: _Worker) -> None:
         """Read one worker's messages until its pipe closes; then handle its death."""

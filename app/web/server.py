@@ -9,6 +9,11 @@ Processes and threads (the machine may have only two cores):
   most ``--display-hz`` times a second; viser's own thread sends the scene to the browsers;
 - **uvicorn** serves the page and the HTTP API in the main thread.
 
+With worker processes, this process's threads (display, viser, uvicorn) run ``display_nice``
+steps below the workers (:func:`lower_priority`; the threads that receive the workers' frames
+keep their priority): on a machine whose cores are short, the robots keep real time and the
+scene is sent a little later, instead of every viewer slowing the robots down.
+
 ``--sessions shared`` (the default) shows one session to every browser; ``--sessions private``
 gives each browser its own while the workers have room (``--robots-per-worker``).
 
@@ -48,6 +53,27 @@ def port_free(host: str, port: int) -> bool:
         except OSError:
             return False
     return True
+
+
+def lower_priority(steps: int, keep: set[int]) -> int:
+    """Lower the priority of this process's threads, but ``keep`` (native ids), by ``steps``
+    nice steps; threads they start later inherit it. Returns how many threads changed (0
+    where Linux's per-thread /proc/self/task is missing). Lowering needs no privilege."""
+    changed = 0
+    task_dir = Path("/proc/self/task")
+    if steps <= 0 or not task_dir.is_dir():
+        return 0
+    for task in task_dir.iterdir():
+        tid = int(task.name)
+        if tid in keep:
+            continue
+        try:
+            nice = min(19, os.getpriority(os.PRIO_PROCESS, tid) + steps)
+            os.setpriority(os.PRIO_PROCESS, tid, nice)
+            changed += 1
+        except OSError:  # the thread ended meanwhile
+            continue
+    return changed
 
 
 def _fail(message: str) -> int:
@@ -117,6 +143,8 @@ def serve(
     app = create_app(
         registry, viser_port=viser_port, report_dir=report_dir, health_extra=display.health
     )
+    if pool is not None:
+        lower_priority(settings.display_nice, keep=pool.receiver_thread_ids())
     config = uvicorn.Config(app, host=host, port=port, log_level="warning")
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host

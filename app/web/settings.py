@@ -3,8 +3,8 @@
 
 ``PELVIC_WALK_HOST``, ``PELVIC_WALK_PORT``, ``PELVIC_WALK_VISER_PORT``,
 ``PELVIC_WALK_REPORT_DIR``, ``PELVIC_WALK_WORKERS``, ``PELVIC_WALK_SESSIONS``,
-``PELVIC_WALK_ROBOTS_PER_WORKER``, ``PELVIC_WALK_DISPLAY_HZ`` and
-``PELVIC_WALK_IDLE_TIMEOUT`` override the defaults; command-line options override both.
+``PELVIC_WALK_ROBOTS_PER_WORKER``, ``PELVIC_WALK_DISPLAY_HZ``, ``PELVIC_WALK_DISPLAY_NICE``
+and ``PELVIC_WALK_IDLE_TIMEOUT`` override the defaults; command-line options override both.
 """
 
 from __future__ import annotations
@@ -31,6 +31,9 @@ class Settings(BaseSettings):
     robots_per_worker: int = Field(default=2, ge=1, le=16)  # robots one worker runs at once
     display_hz: float = Field(default=20.0, ge=1.0, le=60.0)  # scene updates per second
     idle_timeout: float = Field(default=300.0, ge=5.0)  # [s] an API-opened session's life
+    # how much lower than the workers the web and display threads run (Linux nice steps): when
+    # the cores are short, the robots keep real time and the scene updates less often
+    display_nice: int = Field(default=5, ge=0, le=19)
 
     @field_validator("report_dir", mode="before")
     @classmethod
