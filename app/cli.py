@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 from typing import NoReturn
 
-from app.params_cli import add_param_options, params_from_args
+from app.params_cli import add_param_options, params_from_args, positive_int
 from app.sweep.cli import add_sweep_arguments
 from controller.params import METHODS
 
@@ -35,18 +35,8 @@ def _finite(text: str) -> float:
     return value
 
 
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
-
-
 def _port(text: str) -> int:
-    value = _positive_int(text)
+    value = positive_int(text)
     if value > 65535:
         raise argparse.ArgumentTypeError(f"not a port number: {value}")
     return value
@@ -88,7 +78,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument(
         "--robots-per-worker",
-        type=_positive_int,
+        type=positive_int,
         default=None,
         help="robots one worker runs at once (default 2; see pelvic-walk bench)",
     )
@@ -131,15 +121,15 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("experiments", help="reproduce the paper's simulation results")
     p.add_argument("--out", type=Path, required=True)
     p.add_argument("--quick", action="store_true")
-    p.add_argument("--jobs", type=_positive_int, default=None)
+    p.add_argument("--jobs", type=positive_int, default=None)
 
     p = sub.add_parser("sweep", help="a parameter grid over methods (process pool or Ray)")
     add_sweep_arguments(p)
 
     p = sub.add_parser("loadtest", help="N scene viewers against a server (loopback only)")
-    p.add_argument("--viewers", type=_positive_int, default=20)
+    p.add_argument("--viewers", type=positive_int, default=20)
     p.add_argument("--robots", type=int, choices=(1, 2, 3), default=3)
-    p.add_argument("--seconds", type=_positive_int, default=120)
+    p.add_argument("--seconds", type=positive_int, default=120)
     p.add_argument(
         "--port",
         type=_port,
@@ -151,7 +141,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     p = sub.add_parser("bench", help="performance figures")
     p.add_argument("--json", type=Path, default=None)
-    p.add_argument("--ticks", type=_positive_int, default=600)
+    p.add_argument("--ticks", type=positive_int, default=600)
 
     p = sub.add_parser(
         "push-study",
@@ -164,7 +154,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--direction", choices=("left", "right", "forward", "back"), default="left")
     p.add_argument("--duration", type=_finite, default=0.1, help="[s] (default 0.1)")
     p.add_argument("--force", type=_finite, default=None, help="[N] one push, no bisection")
-    p.add_argument("--jobs", type=_positive_int, default=1)
+    p.add_argument("--jobs", type=positive_int, default=1)
     p.add_argument("--json", type=Path, default=None)
     return parser
 

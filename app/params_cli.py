@@ -51,6 +51,17 @@ def convert(group: str, name: str, text: str, meta: dict[str, Any]) -> Any:
     return value
 
 
+def positive_int(text: str) -> int:
+    """An argparse type: a whole number of at least 1 (counts of steps, workers, seconds)."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
+    return value
+
+
 def _meta_of(dotted: str) -> tuple[str, str, dict[str, Any]]:
     group, _, name = dotted.partition(".")
     for g, n, meta in fields():

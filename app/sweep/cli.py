@@ -17,20 +17,11 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, NoReturn
 
+from app.params_cli import positive_int
 from app.sweep.grid import MEASURES, Grid, GridError, grid_from_file, make_grid, parse_sets
 
 PROG = "pelvic-walk sweep"
 DEFAULT_OUT = Path("sweep")
-
-
-def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"not an integer: {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"must be at least 1, got {value}")
-    return value
 
 
 def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
@@ -76,7 +67,7 @@ def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument(
         "--jobs",
-        type=_positive_int,
+        type=positive_int,
         default=None,
         metavar="J",
         help="worker processes (default: the CPU count); with --ray and no "
