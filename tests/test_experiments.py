@@ -91,7 +91,13 @@ def test_run_spec_overrides_any_parameter():
     with pytest.raises(ValueError):  # out of its range: checked by ControllerParams
         RunSpec("mpc", 0.3, 10, overrides=(("pelvis.k_pel", 5.0),)).params()
     study = Study("sweep", 4, 1, (0.3,), 0.05, (0.3,), 1, 4, overrides=(("pelvis.k_pel", 0.3),))
-    assert all(s.overrides == (("pelvis.k_pel", 0.3),) for s in planned_runs(study))
+    runs = planned_runs(study)  # the study's overrides on every run (+ the lateral readings)
+    assert all(("pelvis.k_pel", 0.3) in s.overrides for s in runs)
+    assert {s.overrides for s in runs} == {
+        (("pelvis.k_pel", 0.3),),
+        (("pelvis.k_pel", 0.3), ("pelvis.lateral_distance", "nominal")),
+        (("pelvis.k_pel", 0.3), ("pelvis.lateral_distance", "predicted")),
+    }
 
 
 def _check_tables(markdown: str) -> None:
