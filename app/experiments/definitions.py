@@ -204,6 +204,7 @@ QUICK = Study(
     energy_steps=6,
     sensitivity=(("walk.dsp_split", ("both_ends",), ("mpc",)),),
     sensitivity_steps=4,
+    sensitivity_search=(0.30, 0.50, 0.05),
 )
 
 STUDIES: dict[str, Study] = {"full": FULL, "reduced": REDUCED, "quick": QUICK}
