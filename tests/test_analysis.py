@@ -49,3 +49,46 @@ def test_helpers():
         < 1e-12
     )
     assert reachable_step(0.75, 0.68, 0.21, 30.0) < reachable_step(0.75, 0.68, 0.21, 45.0)
+
+
+# -- the Learn tab's drawing of eq. (1)-(5) (app/web/lesson_math.py) ---------------------------
+def test_analysis_view_shows_both_readings_of_eq5_and_one_percentage():
+    import xml.dom.minidom
+
+    from app.web.lesson_math import EQUATIONS, analysis_html, analysis_svg
+    from app.web.lessons import CLEAN_LIMIT_M, EXPLAIN
+
+    for theta in (0.0, 20.0, 45.0):
+        xml.dom.minidom.parseString(analysis_svg(theta))  # well-formed SVG
+        xml.dom.minidom.parseString(f"<div>{analysis_html(theta, CLEAN_LIMIT_M)}</div>")
+    page = analysis_html(45.0, CLEAN_LIMIT_M)
+    assert "0.391 m" in page and "0.421 m" in page and "0.316 m" in page  # eq. 5 x2, eq. 4
+    assert "148 mm" in page  # eq. 2: l_pel sin 45 deg between the hips
+    # one figure for the paper's gain everywhere: +33 % (its +35 % only as "the paper writes")
+    assert "+33 %" in page and "+33 %" in EXPLAIN["Kinematic analysis (eq. 1-5)"]
+    assert page.count("35 %") == 1 and "writes +35 %" in page
+    # at 0 deg the drawing puts both feet at eq. 4
+    assert analysis_html(0.0, CLEAN_LIMIT_M).count("0.316 m") >= 3
+    for number, math_block in EQUATIONS.items():
+        xml.dom.minidom.parseString(f"<div>{math_block}</div>")
+        assert f"({number})" in math_block
+
+
+def test_every_lesson_names_the_paper_and_is_shown_live():
+    from app.web.camera import CAMERA_VIEWS
+    from app.web.learn_gui import COLUMNS
+    from app.web.lesson_math import EQUATIONS
+    from app.web.lessons import LESSONS
+    from controller.params import METHODS, ControllerParams
+
+    assert len(LESSONS) >= 6
+    for lesson in LESSONS:
+        assert "eq." in lesson.paper
+        assert lesson.view in CAMERA_VIEWS
+        assert set(lesson.methods) <= set(METHODS) and lesson.methods
+        assert all(n in EQUATIONS for n in lesson.equations)
+        assert all(k in COLUMNS for k in lesson.numbers)
+        setup = lesson.setup()
+        ControllerParams().replace(
+            **{k: v for k, v in setup.items() if k in ("walk", "pelvis", "com", "arms")}
+        ).validated()

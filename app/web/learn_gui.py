@@ -1,17 +1,82 @@
-"""The Learn tab of one view's panel: the per-layer explanations and the kinematic analysis
-(Fig. 1-2, eq. 1-5). The text lives in :mod:`app.web.lessons`; this module builds the controls.
+"""The Learn tab of one view's panel: guided lessons with live numbers, the per-layer
+explanations and the kinematic analysis (Fig. 1-2, eq. 1-5). The text lives in
+:mod:`app.web.lessons`; this module builds the controls and reads the numbers from the frames.
 
-Like the rest of the panel, every control only writes intent into the view's session.
+A lesson button writes intent only (parameters from their defaults, methods, a restart, as a
+preset does) and moves the clicking browser's camera. The live numbers are computed on the
+display thread from the frames the view shows and the session's 50 Hz plot rows, counted
+from the moment the lesson's robots restarted: nothing under a lesson is written in advance.
 """
 
 from __future__ import annotations
 
+import html
+import math
 from typing import TYPE_CHECKING, Any
 
-from app.web.lessons import EXPLAIN, analysis_svg
+import numpy as np
+
+from app.live import LiveFrame, live_params
+from app.live.history import COL
+from app.web.lessons import CLEAN_LIMIT_M, EXPLAIN, LESSONS, Lesson, analysis_html
+from controller.params import GROUPS, METHOD_INFO
 
 if TYPE_CHECKING:
+    from app.live.frames import RobotFrame
     from app.web.panel import ControlPanel
+
+NUMBERS_HZ = 2.0  # live-number refreshes per second while running
+STATUS_COLOURS = {
+    "clean": "#1e8e3e",
+    "knee nearly straight": "#e8710a",
+    "IK at the speed limit": "#e8710a",
+    "fell": "#d93025",
+}
+COLUMNS = {  # row label of each live number (Lesson.numbers)
+    "status": "status now",
+    "shares": "share of the time since the lesson started",
+    "step": "step length in force",
+    "falls": "falls since the lesson started",
+    "reach": "leg reach now (max seen)",
+    "kappa": "kappa(J) of the legs now (max)",
+    "waist": "waist yaw now (last two steps)",
+    "rate": "peak waist rate, last two steps",
+    "rate_now": "waist rate now",
+    "jerk": "peak change of the waist rate (50 Hz)",
+    "liftoff": "waist yaw at the last lift-off",
+    "yaw": "yaw momentum now (peak, two steps)",
+    "arms": "arm swing",
+    "settings": "k_pel, horizon in force",
+    "phase": "phase",
+    "plan": "MPC angle: now → horizon end",
+    "hip": "hip advance measured / eq. 2",
+    "pushing": "push",
+    "lateral": "CoM from the support centre (y)",
+}
+
+
+def _num(v: float, digits: int = 0) -> str:
+    if not math.isfinite(v):
+        return "-"
+    return f"{v:.1e}" if abs(v) >= 1e4 else f"{v:.{digits}f}"
+
+
+class _Tally:
+    """What one robot did since the lesson started, from the frames the view showed."""
+
+    def __init__(self, falls: int):
+        self.frames = 0
+        self.status: dict[str, int] = {}
+        self.reach_max = 0.0
+        self.falls0 = falls
+
+    def add(self, r: RobotFrame) -> None:
+        if r.waiting:
+            return
+        self.frames += 1
+        self.status[r.status] = self.status.get(r.status, 0) + 1
+        if np.all(np.isfinite(r.reach)):
+            self.reach_max = max(self.reach_max, float(np.max(r.reach)))
 
 
 class LearnTab:
@@ -20,22 +85,222 @@ class LearnTab:
     def __init__(self, gui: Any, panel: ControlPanel):
         self.gui = gui
         self.panel = panel
-        with gui.add_folder("Explain"):
-            self.lesson_choice = gui.add_dropdown(
+        self.lesson: Lesson | None = None
+        self.start_clock = math.inf  # [s] session clock the lesson's robots started at
+        self.tallies: dict[str, _Tally] = {}
+        self._shown_time = -math.inf
+        self._last_seq = -1
+        self._camera: tuple[str, Any] | None = None  # a view to set once the robots are drawn
+        with gui.add_folder("Guided lessons"):
+            gui.add_markdown(
+                "Each button sets the parameters, the robots and the camera, and restarts the "
+                "robots; the numbers under the lesson are read from them as they walk."
+            )
+            self.buttons = []
+            for i, lesson in enumerate(LESSONS):
+                button = gui.add_button(lesson.title)
+                button.on_click(lambda e, i=i: self.start(i, e.client))
+                self.buttons.append(button)
+            # title, then the live numbers (seen without scrolling), then what to look for
+            self.head = gui.add_html("")
+            self.live = gui.add_html("")
+            self.text = gui.add_html("")
+        with gui.add_folder("Explain", expand_by_default=False):
+            self.layer_choice = gui.add_dropdown(
                 "Layer", tuple(EXPLAIN), initial_value=next(iter(EXPLAIN))
             )
-            self.lesson = gui.add_markdown(EXPLAIN[self.lesson_choice.value])
-            self.lesson_choice.on_update(
-                lambda _e: setattr(self.lesson, "content", EXPLAIN[self.lesson_choice.value])
+            self.layer_text = gui.add_markdown(EXPLAIN[self.layer_choice.value])
+            self.layer_choice.on_update(
+                lambda _e: setattr(self.layer_text, "content", EXPLAIN[self.layer_choice.value])
             )
-        with gui.add_folder("Kinematic analysis (Fig. 1-2, eq. 1-5)"):
-            self.theta_slider = gui.add_slider("Pelvic angle [deg]", 0.0, 45.0, 1.0, 0.0)
-            self.analysis_view = gui.add_html(analysis_svg(0.0))
+        with gui.add_folder("Kinematic analysis (Fig. 1-2, eq. 1-5)", expand_by_default=False):
+            self.theta_slider = gui.add_slider("Pelvic angle [deg]", 0.0, 45.0, 1.0, 45.0)
+            self.analysis_view = gui.add_html(analysis_html(45.0, CLEAN_LIMIT_M))
             self.theta_slider.on_update(
                 lambda _e: setattr(
-                    self.analysis_view, "content", analysis_svg(self.theta_slider.value)
+                    self.analysis_view,
+                    "content",
+                    analysis_html(self.theta_slider.value, CLEAN_LIMIT_M),
                 )
             )
 
-    def update(self, frame: Any, now: float) -> None:
-        """Refresh live numbers from the published ``frame`` (display thread)."""
+    # -- a lesson starts (GUI callback: intent only) ------------------------------------------
+    def start(self, index: int, client: Any = None) -> None:
+        """Set up lesson ``index``: parameters from their defaults plus the lesson's, its
+        robots, a restart (so the numbers count from the same instant), its camera view."""
+        lesson = LESSONS[index]
+        session = self.panel.session
+        setup = lesson.setup()
+        groups = {k: v for k, v in setup.items() if k in GROUPS}
+        session.set_params(live_params().replace(**groups))
+        session.set_methods(setup["methods"])
+        if session.intent.paused:  # an experiment starts walking
+            session.resume()
+        intent = session.reset()
+        self.lesson = lesson
+        self.start_clock = intent.start_clock
+        self.tallies = {}
+        self._shown_time = -math.inf
+        self.head.content = (
+            f'<div style="font: 13px/1.45 sans-serif"><b>{html.escape(lesson.title)}</b><br/>'
+            f'<span style="color:#5f6368">Paper: {html.escape(lesson.paper)}; camera: '
+            f"{lesson.view}</span></div>"
+        )
+        self.text.content = (
+            f'<div style="font: 13px/1.45 sans-serif"><p style="margin:4px 0">{lesson.watch}</p>'
+            f"{lesson.equations_html()}</div>"
+        )
+        self.live.content = "<i>waiting for the robots to restart...</i>"
+        # The view is fitted to the robots shown: set it once the scene shows the lesson's.
+        self._camera = (lesson.view, client)
+
+    # -- live numbers (display thread) ------------------------------------------------------
+    def update(self, frame: LiveFrame, now: float) -> None:
+        """Tally the shown ``frame`` and refresh the lesson's live numbers (at most
+        :data:`NUMBERS_HZ` a second while running, every new frame while paused)."""
+        lesson = self.lesson
+        if lesson is None or frame.clock < self.start_clock - 1e-9:
+            return
+        if tuple(r.method for r in frame.robots) != lesson.methods:
+            return  # the robots were changed by hand: the numbers of the lesson stop
+        if self._camera is not None:  # the scene has drawn this frame's robots already
+            view, client = self._camera
+            self._camera = None
+            self.panel.view.scene.set_camera(view, client)
+        if frame.seq != self._last_seq and not frame.paused:
+            self._last_seq = frame.seq
+            for r in frame.robots:
+                self.tallies.setdefault(r.method, _Tally(r.falls)).add(r)
+        if not (frame.paused or now - self._shown_time >= 1.0 / NUMBERS_HZ):
+            return
+        self._shown_time = now
+        content = self.numbers_html(frame)
+        if self.live.content != content:
+            self.live.content = content
+
+    def numbers_html(self, frame: LiveFrame) -> str:
+        """The lesson's live numbers as a table: one column per robot."""
+        lesson = self.lesson
+        assert lesson is not None
+        window = self.panel.session.history.window(
+            2.0 * frame.robots[0].params.walk.step_time, until=frame.clock
+        )
+        head = "".join(
+            f'<th style="text-align:left;padding:2px 6px">{METHOD_INFO[r.method].title}</th>'
+            for r in frame.robots
+        )
+        rows = []
+        for key in lesson.numbers:
+            cells = "".join(
+                f'<td style="padding:2px 6px">{self._cell(key, r, window.rows.get(r.method))}</td>'
+                for r in frame.robots
+            )
+            rows.append(
+                f'<tr><td style="color:#5f6368;padding:2px 4px">{COLUMNS[key]}</td>{cells}</tr>'
+            )
+        since = frame.clock - self.start_clock
+        state = "paused" if frame.paused else "live"
+        return (
+            f'<div class="lesson-live" style="font: 12.5px sans-serif">'
+            f"<b>{state}</b>, t = {frame.clock:.2f} s ({since:.1f} s into the lesson)"
+            f'<table style="border-collapse:collapse;margin-top:4px"><tr><th></th>{head}</tr>'
+            f"{''.join(rows)}</table></div>"
+        )
+
+    def _cell(self, key: str, r: RobotFrame, rows: np.ndarray | None) -> str:
+        tally = self.tallies.get(r.method) or _Tally(r.falls)
+        recent = rows if rows is not None and len(rows) else np.full((1, len(COL)), np.nan)
+
+        def col(name: str) -> np.ndarray:
+            v = recent[:, COL[name]]
+            return v[np.isfinite(v)]
+
+        if key == "status":
+            status = "standing by to start" if r.waiting else r.status
+            colour = STATUS_COLOURS.get(status, "#444")
+            return f'<b style="color:{colour}">{status}</b>'
+        if key == "shares":
+            n = max(tally.frames, 1)
+            parts = [
+                f'<span style="color:{STATUS_COLOURS[s]}">{s} {100 * c / n:.0f} %</span>'
+                for s, c in sorted(tally.status.items(), key=lambda kv: -kv[1])
+            ]
+            return "<br/>".join(parts) or "-"
+        if key == "step":
+            return f"{r.step_length:.2f} m (step {max(r.step_index, 0)})"
+        if key == "falls":
+            return str(r.falls - tally.falls0)
+        if key == "reach":
+            return f"{_num(float(np.max(r.reach)), 3)} ({_num(tally.reach_max, 3)})"
+        if key == "kappa":
+            k = col("kappa")
+            peak = float(k.max()) if k.size else math.nan
+            return f"{_num(r.kappa_legs)} ({_num(peak)})"
+        if key == "waist":
+            w = col("waist_deg")
+            span = f"{w.min():+.1f} to {w.max():+.1f}°" if w.size else "-"
+            return f"{math.degrees(r.waist_angle):+.1f}° ({span})"
+        if key == "rate":
+            v = col("waist_rate_deg_s")
+            return f"{np.abs(v).max():.0f}°/s" if v.size else "-"
+        if key == "rate_now":
+            v = recent[-1, COL["waist_rate_deg_s"]]
+            return f"{v:+.1f}°/s" if math.isfinite(v) else "-"
+        if key == "jerk":
+            t, v = recent[:, COL["clock"]], recent[:, COL["waist_rate_deg_s"]]
+            ok = np.isfinite(v[1:]) & np.isfinite(v[:-1]) & (np.diff(t) > 0)
+            if not ok.any():
+                return "-"
+            return f"{np.max(np.abs(np.diff(v) / np.diff(t))[ok]):.0f}°/s²"
+        if key == "liftoff":
+            return self._liftoff(recent)
+        if key == "yaw":
+            h = col("yaw_momentum")
+            peak = f"{np.abs(h).max():.2f}" if h.size else "-"
+            return f"{r.yaw_momentum:+.2f} ({peak}) kg m²/s"
+        if key == "arms":
+            return "on" if r.params.arms.enabled else "<b>off</b>"
+        if key == "settings":
+            return f"{r.params.pelvis.k_pel:g}, {r.params.com.horizon:g} s"
+        if key == "phase":
+            return self._phase(r)
+        if key == "plan":
+            hz = r.horizon
+            if hz is None:
+                return "-"
+            th, ref = np.degrees(hz.theta), np.degrees(hz.theta_ref)
+            return (
+                f"{th[0]:+.1f}° → {th[-1]:+.1f}° (reference {ref.min():+.0f} to "
+                f"{ref.max():+.0f}° over {hz.t[-1]:.1f} s)"
+            )
+        if key == "hip":
+            l_pel = float(np.linalg.norm(r.hips[0, :2] - r.hips[1, :2]))
+            measured = abs(float(r.hips[0, 0] - r.hips[1, 0]))
+            predicted = l_pel * abs(math.sin(r.waist_angle))
+            return f"{1000 * measured:.0f} / {1000 * predicted:.0f} mm"
+        if key == "pushing":
+            return "<b>pushing</b>" if r.pushing else "-"
+        if key == "lateral":
+            if not len(r.support):
+                return "-"
+            dy = float(r.com[1] - np.mean(r.support[:, 1]))
+            return f"{1000 * dy:+.0f} mm"
+        raise KeyError(key)
+
+    @staticmethod
+    def _liftoff(rows: np.ndarray) -> str:
+        """Waist yaw at the newest DSP -> SSP change of the 50 Hz rows (within 20 ms)."""
+        dsp, waist = rows[:, COL["in_dsp"]], rows[:, COL["waist_deg"]]
+        lift = np.flatnonzero((dsp[:-1] == 1.0) & (dsp[1:] == 0.0))
+        if not lift.size:
+            return "-"
+        return f"{waist[lift[-1] + 1]:+.1f}°"
+
+    @staticmethod
+    def _phase(r: RobotFrame) -> str:
+        if r.waiting or r.step_index < 0 or r.step_index >= r.plan.n:
+            return "standing"
+        k = r.step_index
+        if r.in_dsp:
+            return f"<b>DSP</b>, lift-off in {max(r.plan.liftoff_times()[k] - r.t, 0.0):.2f} s"
+        return f"SSP, landing in {max(r.plan.landing_times()[k] - r.t, 0.0):.2f} s"

@@ -1,34 +1,195 @@
-"""The Learn tab's content: short lessons per layer, the paper's scenarios, the kinematic
-analysis of eq. (1)-(5) drawn as the paper's Fig. 1-2.
+"""The Learn tab's content: guided lessons that walk through the paper, the presets of its
+scenarios, short explanations per layer, and the checks of settings known to break walking.
 
-Text only here (and one SVG drawing); :mod:`app.web.panel` builds the controls around it.
+Text and data only; :mod:`app.web.learn_gui` and :mod:`app.web.panel` build the controls, and
+the equations and Fig. 1-2 are drawn in :mod:`app.web.lesson_math`. Every length promised
+here was measured on this model with ``pelvic-walk simulate`` (see the comments).
 """
 
 from __future__ import annotations
 
-import math
+from dataclasses import dataclass, field
 from typing import Any
 
+from app.web.lesson_math import analysis_html, analysis_svg, equations
+
+__all__ = [
+    "CLEAN_LIMIT_M",
+    "EXPLAIN",
+    "LESSONS",
+    "PRESETS",
+    "Lesson",
+    "analysis_html",
+    "analysis_svg",
+    "warnings_for",
+]
+
+# Longest steps measured on this model (report/report.md section 2; `pelvic-walk sweep
+# --measure limit`): beyond them a method does not walk cleanly at the default timing. The
+# single source of "our limits" for the presets, lessons and warnings.
+CLEAN_LIMIT_M = {"fixed": 0.37, "redundancy": 0.43, "mpc": 0.43}
+PAPER_LIMIT_M = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
+
 # The paper's scenarios, in one place: parameter groups to change (others keep their value)
-# and optionally the methods to compare.
+# and optionally the methods to compare. Measured with `pelvic-walk simulate --method M
+# --step-length L` (10 steps of 1.2 s, arms on):
+#   0.30 m: every method clean.
+#   0.40 m: fixed completes 10/10 steps but not cleanly: its swing knee straightens
+#           (kappa of the legs ~1e9, reach 0.99+) and 36 IK ticks sit at the joint-speed
+#           limit; mpc clean (kappa 40, waist 25 deg).
+#   0.42 m: fixed falls in its second step (3.08 s, torso tilted over 30 deg); mpc clean.
 PRESETS: dict[str, dict[str, Any]] = {
-    "Paper: 0.30 m steps": {"walk": {"step_length": 0.30, "step_time": 1.2}},
-    "Paper: 0.40 m steps": {
-        "walk": {"step_length": 0.40, "step_time": 1.2},
-        "methods": ["fixed", "mpc"],
-    },
-    # Our fixed pelvis walks cleanly to 0.37 m; at 0.38-0.39 m its swing knee straightens
-    # (kappa > 1000) and the IK hits the joint-speed limit (report section 2). Paper: 0.35 m.
-    "Where our fixed pelvis fails: 0.39 m (paper: 0.35 m)": {
-        "walk": {"step_length": 0.39, "step_time": 1.2},
-        "methods": ["fixed", "mpc"],
-    },
-    "All three methods, 0.30 m": {
+    "Paper: 0.30 m (the paper's fixed limit; every robot clean here)": {
         "walk": {"step_length": 0.30, "step_time": 1.2},
         "methods": ["fixed", "redundancy", "mpc"],
     },
+    "Paper: 0.40 m: our fixed pelvis's knee straightens, the MPC stays clean": {
+        "walk": {"step_length": 0.40, "step_time": 1.2},
+        "methods": ["fixed", "mpc"],
+    },
+    "Eq. 5's 0.42 m: our fixed pelvis falls, the MPC walks": {
+        "walk": {"step_length": 0.42, "step_time": 1.2},
+        "methods": ["fixed", "mpc"],
+    },
     "Defaults": {"walk": {"step_length": 0.2, "step_time": 1.2}, "reset_groups": True},
 }
+
+
+@dataclass(frozen=True)
+class Lesson:
+    """One guided experiment: a button sets it up, the text says what to look for, and the
+    live numbers (``numbers``: columns of :data:`app.web.learn_gui.COLUMNS`) show it."""
+
+    title: str
+    paper: str  # the equations and figures it is about
+    walk: dict[str, Any]  # WalkParams fields set (the other groups back to their defaults)
+    methods: tuple[str, ...]
+    view: str  # a camera view of app.web.camera.CAMERA_VIEWS
+    watch: str  # what to look for (HTML, two or three sentences)
+    equations: tuple[str, ...]  # numbers of app.web.lesson_math.EQUATIONS
+    numbers: tuple[str, ...]
+    groups: dict[str, dict[str, Any]] = field(default_factory=dict)  # other parameter groups
+
+    def setup(self) -> dict[str, Any]:
+        """The preset form (as :data:`PRESETS`): parameter groups, methods, from defaults."""
+        return {
+            "walk": self.walk,
+            **self.groups,
+            "methods": list(self.methods),
+            "reset_groups": True,
+        }
+
+    def equations_html(self) -> str:
+        return equations(*self.equations)
+
+
+_F, _M = CLEAN_LIMIT_M["fixed"], CLEAN_LIMIT_M["mpc"]
+_PF, _PM = PAPER_LIMIT_M["fixed"], PAPER_LIMIT_M["mpc"]
+
+LESSONS: tuple[Lesson, ...] = (
+    Lesson(
+        "1. Why the fixed pelvis cannot reach",
+        "eq. 4-5, 45; Fig. 1-2, 13",
+        {"step_length": 0.40, "step_time": 1.2},
+        ("fixed", "mpc"),
+        "follow",
+        "At 0.40 m, the paper's limit with rotation, watch the fixed robot's <b>swing leg turn "
+        "red</b> at each landing: its reach (hip-to-ankle / leg length) nears 1, the knee is "
+        "straight and <b>kappa(J)</b> of its legs explodes; its badge says <i>knee nearly "
+        "straight</i> or <i>IK at the speed limit</i>. The MPC robot turns its pelvis (about "
+        "25°): its kappa stays near 40 and its knee rarely straightens. Our limits: fixed "
+        f"{_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
+        "press the preset <i>Eq. 5's 0.42 m</i> and the fixed robot falls.",
+        ("4", "5", "45"),
+        ("status", "shares", "reach", "kappa", "waist", "falls"),
+    ),
+    Lesson(
+        "2. What the prediction does",
+        "eq. 25-33, 34-38; Fig. 5-7",
+        {"step_length": 0.40, "step_time": 1.2},
+        ("mpc",),
+        "top",
+        "Press <b>Pause</b> while both feet are down (phase <i>DSP</i> below), or <b>Step: to "
+        "lift-off</b>, and open the <b>Inspect</b> tab: the reference angle (eq. 30-31) already "
+        "sees the next footholds over the 1.6 s horizon, and the MPC's plan (eq. 37) turns the "
+        "pelvis toward the coming swing before the foot lifts (its rate reverses in the DSP). "
+        "The numbers below are read from the paused frame: the planned angle now and at the "
+        "end of the horizon, and the waist rate now.",
+        ("30", "31", "37"),
+        ("phase", "plan", "rate_now", "waist", "liftoff"),
+    ),
+    Lesson(
+        "3. What arm swing buys",
+        "eq. 41-43; Fig. 12",
+        {"step_length": 0.30, "step_time": 1.2},
+        ("fixed", "mpc"),
+        "follow",
+        "The arms are <b>off</b>: each swinging leg twists the body about the vertical and the "
+        "yaw-momentum <b>arrow</b> at the CoM grows. Read the peak over the last two steps, then "
+        "tick <b>Arm swing: enabled</b> (Controls tab) and watch it fall as the arms cancel "
+        "the legs' momentum (eq. 43); the paper reports up to -60 % in its experiment.",
+        ("41", "43"),
+        ("arms", "yaw", "waist", "falls"),
+        {"arms": {"enabled": False}},
+    ),
+    Lesson(
+        "4. Horizon length and k_pel",
+        "eq. 31-37; Fig. 7",
+        {"step_length": 0.40, "step_time": 1.2},
+        ("mpc",),
+        "top",
+        "k_pel scales the reference angle for a given foot-to-pelvis distance (eq. 31): at 0.10 "
+        "the pelvis turns less and the legs must reach further (the reach and kappa rise). Raise "
+        "<b>k_pel</b> (Pelvic MPC folder) to 0.25 and 0.5 and read the waist range, reach and "
+        "kappa; then shorten the <b>horizon</b> below one step (1.2 s): the MPC no longer sees "
+        "the next foothold in time.",
+        ("31", "37"),
+        ("settings", "waist", "reach", "kappa", "status", "falls"),
+        {"pelvis": {"k_pel": 0.10}},
+    ),
+    Lesson(
+        "5. Redundancy vs the MPC's waist rate",
+        "eq. 37-40; Fig. 8-9",
+        {"step_length": 0.40, "step_time": 1.2},
+        ("redundancy", "mpc"),
+        "follow",
+        "Both robots turn the pelvis, differently. <b>Redundancy</b> (the waist is one more "
+        "free IK joint) turns only once the foot swings, and its rate jumps at lift-off and "
+        "landing; the <b>MPC</b> plans a smooth wave (the paper: -22 to +22° at 0.4 m). Compare "
+        "the waist range and the <b>peak change of the waist rate</b> (its sharpness); the peak "
+        "rates themselves are alike on our robot. The Plots tab draws both (Fig. 8).",
+        ("37", "39"),
+        ("waist", "liftoff", "rate", "jerk", "yaw", "status"),
+    ),
+    Lesson(
+        "6. Eq. 1-5 against what the robots reach",
+        "eq. 1-5; Fig. 1-2",
+        {"step_length": 0.42, "step_time": 1.2},
+        ("fixed", "mpc"),
+        "side",
+        "0.42 m is eq. 5 with the pelvis at 45° as the paper evaluates it (the Kinematic analysis "
+        "below). Our fixed pelvis walks further than the static eq. 4 (0.316 m): the stance hip "
+        f"travels forward during the step, so our limits are fixed {_F:.2f} m, MPC {_M:.2f} m "
+        f"(paper: {_PF:.2f} / {_PM:.2f} m). Here the fixed robot falls; the MPC walks with much "
+        "less than 45°. Compare the measured hip advance with eq. 2's l_pel sin(theta).",
+        ("2", "4", "5"),
+        ("step", "hip", "waist", "reach", "status", "falls"),
+    ),
+    Lesson(
+        "7. A push: what the controller does",
+        "eq. 10-18 (CoM MPC); no figure: the paper does not push",
+        {"step_length": 0.30, "step_time": 1.2},
+        ("fixed", "redundancy", "mpc"),
+        "front",
+        "Open <b>Push a robot</b> (Controls tab) and push one robot sideways. The CoM MPC "
+        "re-plans from the measured CoM at the next tick and moves the ZMP inside the support "
+        "foot (eq. 18), but <b>nothing moves the footsteps</b>: a push the foot cannot absorb "
+        "topples the robot. <code>pelvic-walk push-study</code> measures each method's limit "
+        "(README, Push).",
+        ("18",),
+        ("pushing", "lateral", "status", "falls"),
+    ),
+)
 
 # Short lessons, one per layer, with the paper's equation numbers.
 EXPLAIN: dict[str, str] = {
@@ -82,56 +243,12 @@ EXPLAIN: dict[str, str] = {
         "condition number of the leg Jacobian (eq. 45): it shoots up as a knee straightens."
     ),
     "Kinematic analysis (eq. 1-5)": (
-        "Static step limit of a stretched leg: sqrt(l_leg^2 - z0^2) (eq. 4, 0.31 m); turning "
-        "the pelvis moves the forward hip ahead by up to l_pel/2 (eq. 2, 5): 0.42 m, +35 %. "
-        "Use the slider below the lesson to turn the pelvis."
+        "Static step limit of a stretched leg: sqrt(l_leg^2 - z0^2) (eq. 4, 0.316 m). Turning "
+        "the pelvis moves the swing hip ahead (eq. 2, 5): 0.391 m with eq. 5 as printed "
+        "(0.5 l_pel sin theta), 0.421 m (+33 %) as the paper evaluates it (its 0.42 m). "
+        "Turn the pelvis with the slider of the Kinematic analysis folder."
     ),
 }
-
-
-def analysis_svg(theta_deg: float) -> str:
-    """Top view of the pelvis turned by ``theta_deg`` and the static step limit (eq. 1-5)."""
-    from controller.analysis import hip_points_for_angle, kinematic_analysis, reachable_step
-
-    ka = kinematic_analysis()
-    l_leg, z0, l_pel = ka["l_leg"], ka["z0"], ka["l_pel"]
-    step0 = reachable_step(l_leg, z0, l_pel, 0.0)
-    step = reachable_step(l_leg, z0, l_pel, theta_deg)
-    hx = hip_points_for_angle(theta_deg, l_pel)  # (2,) x of left, right hip [m]
-    hy = 0.5 * l_pel * math.cos(math.radians(theta_deg))
-    scale, ox, oy = 300.0, 70.0, 95.0  # px per m, origin (pelvis centre) in px
-
-    def px(x: float, y: float) -> tuple[float, float]:
-        return ox + scale * x, oy - scale * y
-
-    (lx, ly), (rx, ry) = px(hx[0], hy), px(hx[1], -hy)
-    foot0, foot1 = px(step0, -0.12), px(step, -0.12)
-    rear = px(0.0, -0.12)
-    return f"""
-<svg viewBox="0 0 320 198" width="100%" xmlns="http://www.w3.org/2000/svg"
-     style="font: 11px sans-serif; background: #f6f7f9; border-radius: 6px">
-  <text x="8" y="16">top view, walking to the right; pelvis turned {theta_deg:.0f} deg</text>
-  <line x1="{lx:.1f}" y1="{ly:.1f}" x2="{rx:.1f}" y2="{ry:.1f}" stroke="#444" stroke-width="6"
-        stroke-linecap="round"/>
-  <circle cx="{lx:.1f}" cy="{ly:.1f}" r="6" fill="#4682ff"/>
-  <circle cx="{rx:.1f}" cy="{ry:.1f}" r="6" fill="#ff5050"/>
-  <line x1="{rear[0]:.1f}" y1="{rear[1] + 8:.1f}" x2="{foot0[0]:.1f}" y2="{foot0[1] + 8:.1f}"
-        stroke="#999" stroke-width="3"/>
-  <line x1="{rear[0]:.1f}" y1="{rear[1] + 22:.1f}" x2="{foot1[0]:.1f}" y2="{foot1[1] + 22:.1f}"
-        stroke="#28b464" stroke-width="3"/>
-  <text x="8" y="{rear[1] + 12:.1f}">eq. 4</text>
-  <text x="8" y="{rear[1] + 26:.1f}">eq. 5</text>
-  <text x="{foot0[0] + 4:.1f}" y="{foot0[1] + 12:.1f}">{step0:.3f} m</text>
-  <text x="{foot1[0] + 4:.1f}" y="{foot1[1] + 26:.1f}">{step:.3f} m
-    (+{100 * (step / step0 - 1):.0f} %)</text>
-  <text x="8" y="176">hip advance {1000 * (hx[1] - hx[0]):.0f} mm (eq. 2)</text>
-  <text x="8" y="191">l_leg {l_leg} m, z0 {z0} m, l_pel {l_pel} m</text>
-</svg>"""
-
-
-# Longest steps measured on this model (README; `pelvic-walk sweep --measure limit`): beyond
-# them a method does not walk cleanly at the default timing.
-CLEAN_LIMIT_M = {"fixed": 0.37, "redundancy": 0.43, "mpc": 0.43}
 
 
 def warnings_for(params: Any) -> list[str]:
