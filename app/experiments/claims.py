@@ -24,7 +24,8 @@ from controller.params import ControllerParams
 
 def evaluate(study: Study, r: StudyResults) -> list[ClaimResult]:
     """Every applicable claim of :data:`CLAIMS` judged on ``r``, in the table's order."""
-    return [c.judge(study, r) for c in CLAIMS if c.applies(study, r)]
+    judged = [c.judge(study, r) for c in CLAIMS if c.applies(study, r)]
+    return sorted(judged, key=lambda c: c.section)  # stable: the table's order within a section
 
 
 # -- the paper's side, from paper.py ----------------------------------------------------------
