@@ -428,6 +428,7 @@ class Meta:
     full_estimate_s: float | None = None
     study_s: float | None = None  # [s] the study's runs alone (before the sensitivity section)
     load_average: float | None = None  # the machine's 1-minute load average at the end
+    load_average_start: float | None = None  # ... and when the runs started
 
 
 @dataclass(frozen=True)

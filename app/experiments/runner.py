@@ -137,6 +137,7 @@ def main(
     (out / "figures").mkdir(parents=True, exist_ok=True)
     started = datetime.now(UTC)
     t0 = time.perf_counter()
+    load_start = os.getloadavg()[0]
     results, _ = run_study(study, jobs)
     study_s = time.perf_counter() - t0
     sens = sections_more.run_sensitivity(study, jobs)
@@ -146,7 +147,7 @@ def main(
         command = "pelvic-walk experiments --out {} {}--jobs {}".format(
             out, "--quick " if quick else "", jobs
         )
-    return finish(out, study, results, sens, command, started, t0, study_s, jobs)
+    return finish(out, study, results, sens, command, started, t0, study_s, jobs, load_start)
 
 
 def finish(
@@ -159,6 +160,7 @@ def finish(
     t0: float,
     study_s: float,
     jobs: int,
+    load_start: float | None = None,
 ) -> int:
     """Analyse finished runs, draw the figures, write results.json and report.md."""
     from app.experiments import figures
@@ -178,6 +180,7 @@ def finish(
         f"{platform.python_version()}",
         errors={s.key: r.error for s, r in results.items() if r.error},
         load_average=os.getloadavg()[0],
+        load_average_start=load_start,
     )
     data = analyse(study, results, meta, sens)
     data = dataclasses.replace(
