@@ -29,6 +29,7 @@ pytestmark = [
     pytest.mark.browser,
     pytest.mark.skipif(not __import__("os").path.exists(CHROMIUM), reason=f"{CHROMIUM} missing"),
 ]
+SMALL, LARGE = {"width": 1100, "height": 760}, {"width": 1400, "height": 900}
 SCREENSHOTS = {0: "lesson_reach.png", 4: "lesson_waist_rate.png"}  # lesson index -> file
 
 
@@ -56,7 +57,7 @@ def _server():
     port, viser_port = free_port(), free_port()
     vs = viser.ViserServer(host="127.0.0.1", port=viser_port, verbose=False)
     registry = SessionRegistry.start("shared", initial_intent())
-    display = Display(vs, registry, 10.0).start()  # lighter on a shared machine
+    display = Display(vs, registry, 5.0).start()  # software WebGL: fewer redraws
     app = create_app(registry, viser_port=viser_port, health_extra=display.health)
     server = uvicorn.Server(
         uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="off")
@@ -95,7 +96,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
     with _server() as (base, display, vs), sync_playwright() as p:
         browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
         try:
-            page = browser.new_page(viewport={"width": 1400, "height": 900})
+            page = browser.new_page(viewport=SMALL)  # less to render in software WebGL
             page.goto(base + "/")
             scene = page.frame_locator("#scene")
             scene.locator("canvas").first.wait_for(state="visible", timeout=60_000)
@@ -108,20 +109,30 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
             _close_notice(scene)
             scene.get_by_role("tab", name="Learn").first.click(timeout=90_000)
             learn = display.views[None].panel.learn
+            params = None
+            t_start = time.monotonic()
             for i, lesson in enumerate(LESSONS):
-                reported.clear()
-                scene.get_by_role("button", name=lesson.title).first.click(
-                    timeout=60_000, no_wait_after=True
-                )
-                # the parameters (GET /api/params) and the robots
-                params = wait_for(
-                    lambda lesson=lesson: (
-                        (b := httpx.get(f"{base}/api/params", timeout=5).json())["methods"]
-                        == list(lesson.methods)
-                        and b["walk"]["step_length"] == pytest.approx(lesson.walk["step_length"])
-                        and b
+                # the parameters (GET /api/params) and the robots; a click that a starved
+                # software-WebGL page dropped is repeated (at most twice)
+                for _attempt in range(3):
+                    reported.clear()
+                    button = scene.get_by_role("button", name=lesson.title).first
+                    button.scroll_into_view_if_needed(timeout=30_000)
+                    button.click(timeout=60_000, no_wait_after=True)
+                    params = wait_for(
+                        lambda lesson=lesson: (
+                            (b := httpx.get(f"{base}/api/params", timeout=5).json())["methods"]
+                            == list(lesson.methods)
+                            and b["walk"]["step_length"]
+                            == pytest.approx(lesson.walk["step_length"])
+                            and learn.lesson is lesson
+                            and b
+                        ),
+                        timeout=15,
                     )
-                )
+                    if params:
+                        break
+                print(f"{time.monotonic() - t_start:5.1f} s: {lesson.title} (click {_attempt + 1})")
                 assert params, f"{lesson.title}: the parameters did not change"
                 for group, values in lesson.groups.items():
                     for name, value in values.items():
@@ -168,14 +179,18 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
                     )
                     assert fell and [r["method"] for r in fell] == ["fixed"], fell
                 if i in SCREENSHOTS:
-                    time.sleep(6 if i else 2)
+                    page.set_viewport_size(LARGE)
+                    time.sleep(6 if i else 3)
                     _close_notice(scene)
                     for _ in range(5):  # the numbers are re-rendered twice a second
                         with contextlib.suppress(Exception):
                             box.evaluate("e => e.scrollIntoView({block: 'start'})")
                             break
                     page.screenshot(path=str(ARTIFACTS / SCREENSHOTS[i]))
+                    page.set_viewport_size(SMALL)
+            print(f"{time.monotonic() - t_start:5.1f} s: all lessons checked")
             # the kinematic analysis (Fig. 1-2): eq. 5 as printed beside the paper's reading
+            page.set_viewport_size(LARGE)
             scene.get_by_text("Kinematic analysis (Fig. 1-2, eq. 1-5)").first.click()
             drawing = scene.get_by_text("Eq. 5 as printed").first
             drawing.wait_for(state="visible", timeout=30_000)

@@ -293,7 +293,7 @@ def analysis_svg(theta_deg: float) -> str:
         stroke="#444" stroke-width="5" stroke-linecap="round"/>
   <circle cx="{tx(hl[0]):.1f}" cy="{ty(hl[1]):.1f}" r="5" fill="#4682ff"/>
   <circle cx="{tx(hr[0]):.1f}" cy="{ty(hr[1]):.1f}" r="5" fill="#ff5050"/>
-  <text x="6" y="184" fill="#ff5050">swing hip {1000 * hr[0]:+.0f} mm ahead of the pelvis centre;
+  <text x="6" y="184" fill="#ff5050">swing hip {1000 * hr[0]:+.0f} mm ahead of the centre;
     hips {1000 * n["hip_advance"]:.0f} mm apart (eq. 2)</text>
   <line x1="6" y1="194" x2="334" y2="194" stroke="#d0d3d7"/>
   <text x="6" y="209" font-weight="bold">side (x-z): swing knee straight at landing</text>
