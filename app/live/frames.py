@@ -21,8 +21,6 @@ from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
 from models.dyros_jet import ANKLE_BODIES, HIP_BODIES
 
-REACH_STRAIGHT = 0.985  # hip-to-ankle / leg length above this: "knee nearly straight"
-
 
 @dataclass(frozen=True)
 class Horizon:
@@ -89,10 +87,15 @@ class RobotFrame:
 
     @property
     def status(self) -> str:
-        """One badge: fell / knee nearly straight / IK at the speed limit / clean."""
+        """One badge: fell / knee nearly straight / IK at the speed limit / clean.
+
+        The same test as the study's *clean* (``app/runs.py``): the knee is "nearly straight"
+        when kappa(J) of the leg columns reaches KAPPA_SINGULAR, so a robot the report calls
+        clean never shows another badge live. The reach gauges show the leg's extension
+        continuously (red near 1) for the eye."""
         if self.fell:
             return "fell"
-        if self.kappa_legs >= KAPPA_SINGULAR or float(np.max(self.reach)) >= REACH_STRAIGHT:
+        if self.kappa_legs >= KAPPA_SINGULAR:
             return "knee nearly straight"
         if self.speed_limited:
             return "IK at the speed limit"

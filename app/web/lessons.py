@@ -100,7 +100,7 @@ LESSONS: tuple[Lesson, ...] = (
         "red</b> at each landing: its reach (hip-to-ankle / leg length) nears 1, the knee is "
         "straight and <b>kappa(J)</b> of its legs explodes; its badge says <i>knee nearly "
         "straight</i> or <i>IK at the speed limit</i>. The MPC robot turns its pelvis (about "
-        "25°): its kappa stays near 40 and its knee rarely straightens. Our limits: fixed "
+        "25°): its kappa stays near 40 and its badge <i>clean</i>. Our limits: fixed "
         f"{_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
         "press the preset <i>Eq. 5's 0.42 m</i> and the fixed robot falls.",
         ("4", "5", "45"),
