@@ -34,8 +34,10 @@ chromium:
 		else echo "warning: /usr/bin/chromium missing and not root; the browser test will be skipped"; fi; \
 	fi
 
+# Two processes (pytest-xdist), one test file each: many tests wait on real-time walks,
+# servers and a browser, so two share this 2-core machine's time well.
 test: $(TEST_STAMP) chromium
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n 2 --dist loadfile
 
 # Style and types: ruff's rules and formatting everywhere, mypy on the pure controller.
 lint: $(TEST_STAMP)
