@@ -112,7 +112,9 @@ def click_slider(page, frame, label: str, value: float) -> None:
 
 
 def close_notice(frame) -> None:
-    """Close viser's 'Software WebGL rendering' toast (headless Chromium has no GPU)."""
+    """Close viser's 'Software WebGL rendering' toast (headless Chromium has no GPU) if it is
+    (still) there. A dispatched click: on a busy machine the toast's animation can keep a real
+    click waiting past its timeout, and the toast is cosmetic."""
     button = frame.locator(".mantine-Notification-closeButton")
-    if button.count():
-        button.first.click()
+    with contextlib.suppress(Exception):  # it may have gone by itself meanwhile
+        button.first.dispatch_event("click", timeout=3000)

@@ -19,7 +19,7 @@ import time
 import httpx
 import numpy as np
 import pytest
-from browser_util import ARTIFACTS, CHROME_ARGS, CHROMIUM, free_port, wait_for
+from browser_util import ARTIFACTS, CHROME_ARGS, CHROMIUM, close_notice, free_port, wait_for
 
 from app.web.camera import camera_pose
 from app.web.learn_gui import COLUMNS
@@ -76,13 +76,6 @@ def _server():
         vs.stop()
 
 
-def _close_notice(frame) -> None:
-    """Close viser's 'Software WebGL rendering' toast if it is (still) there."""
-    button = frame.locator(".mantine-Notification-closeButton")
-    with contextlib.suppress(Exception):  # it may have gone by itself meanwhile
-        button.first.dispatch_event("click", timeout=3000)
-
-
 def _close(a, b, tol=1e-3) -> bool:
     return bool(np.allclose(np.asarray(a, float), np.asarray(b, float), atol=tol))
 
@@ -106,7 +99,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
             client.camera.on_update(
                 lambda cam: reported.append((np.array(cam.position), np.array(cam.up_direction)))
             )
-            _close_notice(scene)
+            close_notice(scene)
             scene.get_by_role("tab", name="Learn").first.click(timeout=90_000)
             learn = display.views[None].panel.learn
             params = None
@@ -181,7 +174,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
                 if i in SCREENSHOTS:
                     page.set_viewport_size(LARGE)
                     time.sleep(6 if i else 3)
-                    _close_notice(scene)
+                    close_notice(scene)
                     for _ in range(5):  # the numbers are re-rendered twice a second
                         with contextlib.suppress(Exception):
                             box.evaluate("e => e.scrollIntoView({block: 'start'})")
