@@ -264,3 +264,28 @@ def test_a_robot_restarted_alone_rejoins_in_phase(running):
     cycle = 2 * mpc.params.walk.step_time
     offset = (mpc.t - fixed.t) % cycle
     assert min(offset, cycle - offset) < 0.011, (mpc.t, fixed.t)
+
+
+def test_the_time_base_moves_only_for_a_loop_that_ran_late():
+    from app.live.frames import LiveFrame
+
+    now = [100.0]
+    sim = LiveSim(short_params(3), methods=["mpc"], clock=lambda: now[0])
+    sim._box.modify(lambda cur: {"anchor": (100.0, 0.0)})
+    intent = sim.intent
+
+    def frame(clock: float, wall: float) -> LiveFrame:
+        return LiveFrame(
+            seq=1, clock=clock, wall=wall, paused=False, speed=1.0, realtime_factor=None,
+            compute_realtime_factor=None, intent_version=intent.version, steps_done=0,
+            pushes_done=0, robots=(),
+        )  # fmt: skip
+
+    # made on time at wall 102 (clock 2.0) but delivered 1 s late: the base stays
+    now[0] = 103.0
+    sim._catch_up(frame(2.0, 102.0))
+    assert sim.intent.anchor == (100.0, 0.0)
+    # made 0.5 s behind its base: the base moves to where that loop was, when it was there
+    now[0] = 103.1
+    sim._catch_up(frame(1.5, 102.0))
+    assert sim.intent.anchor == (102.0, 1.5)

@@ -118,6 +118,9 @@ class LiveFrame:
     robots: tuple[RobotFrame, ...]
     rows: dict[str, np.ndarray] = field(default_factory=dict, repr=False)  # new plot rows
     restarted: bool = False  # the robots were rebuilt (reset, methods): plots start anew
+    # [s] the loop's wall clock when it published (time.monotonic: one clock for every process
+    # of the machine), so a late delivery is not mistaken for a late simulation; 0: unknown
+    wall: float = 0.0
 
     def robot(self, method: str) -> RobotFrame | None:
         return next((r for r in self.robots if r.method == method), None)

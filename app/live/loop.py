@@ -396,6 +396,7 @@ class LiveLoop:
         frame = LiveFrame(
             seq=self.seq,
             clock=self.clock,
+            wall=self._clock(),
             paused=intent.paused,
             speed=intent.speed,
             realtime_factor=rtf,

@@ -128,7 +128,8 @@ class RemoteSession(SessionView):
             if not order or (method != order[0] and not frame.paused):
                 return  # merge on the lead part's frames (and every frame while paused)
             latest = [self._recent[m][-1] for m in order]
-            instant = min(p.clock for p in latest)  # the slowest part
+            slowest = min(latest, key=lambda p: p.clock)
+            instant = slowest.clock
             paused = all(p.paused for p in latest)
             # running: each robot as it was at that instant; paused: as it stands (a single
             # step must show every part's new tick)
@@ -141,6 +142,7 @@ class RemoteSession(SessionView):
                 lead,
                 seq=self._seq,
                 clock=instant,
+                wall=slowest.wall,  # when the slowest part was there
                 paused=paused,
                 realtime_factor=None if None in rtf else min(rtf),  # type: ignore[type-var]
                 compute_realtime_factor=None if None in crtf else min(crtf),  # type: ignore

@@ -257,14 +257,31 @@ class SessionView:
 
     def _catch_up(self, frame: LiveFrame) -> None:
         """Move the time base when the loops fell behind it by more than CATCH_UP_S (e.g.
-        the machine was busy): otherwise they would rush to catch up."""
+        the machine was busy): otherwise they would rush to catch up.
+
+        Behind is judged where the frame was made (its ``wall`` time against the time base
+        it ran on), not when it arrived here: a frame delivered late by a busy web process
+        must not move the base back and make punctual loops wait."""
         intent = self.intent
-        now = self._wall()
-        if intent.paused or now - self._last_catch_up < CATCH_UP_S:
+        if intent.paused or frame.paused or frame.wall <= 0.0:
             return
-        if self.clock_now(intent) - frame.clock > CATCH_UP_S:
+        if frame.intent_version < intent.version:  # made on an older time base
+            return
+        now = self._wall()
+        if now - self._last_catch_up < CATCH_UP_S:
+            return
+        wall0, clock0 = intent.anchor
+        target = clock0 + (frame.wall - wall0) * intent.speed
+        if target - frame.clock > CATCH_UP_S:
             self._last_catch_up = now
-            self._box.modify(lambda cur: {"anchor": (now, frame.clock)} if not cur.paused else {})
+            anchor = intent.anchor
+            self._box.modify(
+                lambda cur: (
+                    {"anchor": (frame.wall, frame.clock)}
+                    if not cur.paused and cur.anchor == anchor
+                    else {}
+                )
+            )
 
 
 class LiveSim(SessionView):

@@ -33,7 +33,7 @@ class Settings(BaseSettings):
     idle_timeout: float = Field(default=300.0, ge=5.0)  # [s] an API-opened session's life
     # how much lower than the workers the web and display threads run (Linux nice steps): when
     # the cores are short, the robots keep real time and the scene updates less often
-    display_nice: int = Field(default=5, ge=0, le=19)
+    display_nice: int = Field(default=15, ge=0, le=19)
 
     @field_validator("report_dir", mode="before")
     @classmethod
