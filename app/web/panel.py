@@ -76,6 +76,7 @@ class ControlPanel:
         self._message: str | None = None  # a one-off message in the status area
         self._status_time = -math.inf
         gui.configure_theme(
+            control_layout="fixed",  # viser 1.1 warns it is deprecated; its default floats
             control_width="large",
             dark_mode=False,
             show_logo=False,
