@@ -158,6 +158,7 @@ def _clean_env(home: Path) -> dict[str, str]:
         if not k.startswith("PELVIC_WALK_") and k not in ("PYTHONPATH", "VIRTUAL_ENV")
     }
     env["XDG_STATE_HOME"] = str(home / "state")  # no recorded report: the packaged one
+    env["PELVIC_WALK_DISPLAY_NICE"] = "0"  # full priority beside another pytest process
     return env
 
 

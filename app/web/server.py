@@ -9,9 +9,10 @@ Processes and threads (the machine may have only two cores):
   most ``--display-hz`` times a second; viser's own thread sends the scene to the browsers;
 - **uvicorn** serves the page and the HTTP API in the main thread.
 
-With worker processes, this process's threads (display, viser, uvicorn) run ``display_nice``
-steps below the workers (:func:`lower_priority`; the threads that receive the workers' frames
-keep their priority): on a machine whose cores are short, the robots keep real time and the
+With worker processes, this process's display and viser threads run ``display_nice``
+steps below the workers (:func:`lower_priority`; the main thread (uvicorn, the API) and the
+threads that receive the workers' frames keep their priority): on a machine whose cores are
+short, the robots keep real time and the
 scene is sent a little later, instead of every viewer slowing the robots down.
 
 ``--sessions shared`` (the default) shows one session to every browser; ``--sessions private``
@@ -28,6 +29,7 @@ import logging
 import os
 import socket
 import sys
+import threading
 from pathlib import Path
 
 import viser
@@ -144,7 +146,10 @@ def serve(
         registry, viser_port=viser_port, report_dir=report_dir, health_extra=display.health
     )
     if pool is not None:
-        lower_priority(settings.display_nice, keep=pool.receiver_thread_ids())
+        # the main thread (uvicorn, and the API's worker threads it starts) keeps its
+        # priority: the HTTP API is light and must answer promptly
+        keep = pool.receiver_thread_ids() | {threading.get_native_id()}
+        lower_priority(settings.display_nice, keep=keep)
     config = uvicorn.Config(app, host=host, port=port, log_level="warning")
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host
