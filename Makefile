@@ -34,10 +34,11 @@ chromium:
 		else echo "warning: /usr/bin/chromium missing and not root; the browser test will be skipped"; fi; \
 	fi
 
-# Two processes (pytest-xdist), one test file each: many tests wait on real-time walks,
-# servers and a browser, so two share this 2-core machine's time well.
+# Two processes (pytest-xdist), one test file each, the browser files together (one Chromium
+# at a time, tests/conftest.py): many tests wait on real-time walks and servers, so two
+# share this 2-core machine's time well.
 test: $(TEST_STAMP) chromium
-	$(BIN)/python -m pytest -q -n 2 --dist loadfile
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 # Style and types: ruff's rules and formatting everywhere, mypy on the pure controller.
 lint: $(TEST_STAMP)

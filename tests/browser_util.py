@@ -3,12 +3,14 @@ ports, Debian's Chromium through Playwright, and moving a viser slider with the 
 
 from __future__ import annotations
 
+import collections
 import contextlib
 import os
 import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -58,12 +60,17 @@ def serving(*args: str) -> Iterator[tuple[str, str, subprocess.Popen]]:
         stderr=subprocess.STDOUT,
         text=True,
     )
+    # Drain its output all along (an unread pipe fills and then blocks the server's logging),
+    # keeping the last lines for a failure's message.
+    proc.log = collections.deque(maxlen=200)  # type: ignore[attr-defined]
+    threading.Thread(target=lambda: proc.log.extend(proc.stdout), daemon=True).start()
     base = f"http://127.0.0.1:{port}"
     try:
         deadline = time.monotonic() + 120
         while time.monotonic() < deadline:
             if proc.poll() is not None:
-                pytest.fail(f"serve exited with {proc.returncode}: {proc.stdout.read()[-2000:]}")
+                time.sleep(0.5)  # the last lines reach the log
+                pytest.fail(f"serve exited with {proc.returncode}: {server_log(proc)}")
             try:
                 if httpx.get(f"{base}/api/health", timeout=1).status_code == 200:
                     break
@@ -81,6 +88,11 @@ def serving(*args: str) -> Iterator[tuple[str, str, subprocess.Popen]]:
             proc.wait(5)
 
 
+def server_log(proc: subprocess.Popen, lines: int = 40) -> str:
+    """The last lines ``serving``'s server printed."""
+    return "".join(list(getattr(proc, "log", []))[-lines:])
+
+
 def wait_for(check, timeout: float = 30.0, every: float = 0.3):
     """Poll ``check()`` until it returns something truthy; that value, or None."""
     deadline = time.monotonic() + timeout
@@ -95,8 +107,8 @@ def wait_for(check, timeout: float = 30.0, every: float = 0.3):
 def slider(frame, label: str):
     """The ``role=slider`` thumb and the track box of a viser slider, by its label."""
     handle = frame.locator("label", has_text=label).first
-    handle.wait_for(timeout=60_000)
-    root = frame.locator(f'[id="{handle.get_attribute("for")}"]')
+    handle.wait_for(timeout=90_000)
+    root = frame.locator(f'[id="{handle.get_attribute("for", timeout=90_000)}"]')
     return root.locator('[role="slider"]'), root.locator(".mantine-Slider-track")
 
 
@@ -112,6 +124,13 @@ def click_slider(page, frame, label: str, value: float) -> None:
     page.mouse.click(
         box["x"] + (value - lo) / (hi - lo) * box["width"], box["y"] + box["height"] / 2
     )
+
+
+def press(locator, timeout: float = 90_000) -> None:
+    """Click a viser tab or button by dispatching the click to it: a real mouse click waits for
+    the page to take input, which a software-rendered scene can hold off past any timeout on a
+    busy 2-core machine (seen in CI); the GUI's handlers are what these tests check."""
+    locator.first.dispatch_event("click", timeout=timeout)
 
 
 def close_notice(frame) -> None:

@@ -19,6 +19,7 @@ from browser_util import (
     click_slider,
     close_notice,
     needs_chromium,
+    press,
     serving,
     slider,
     wait_for,
@@ -90,14 +91,14 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             )
             time.sleep(12)
             page.screenshot(path=str(ARTIFACTS / "three_robots.png"))
-            scene.get_by_role("tab", name="Plots").first.click()
+            press(scene.get_by_role("tab", name="Plots"))
             scene.get_by_text("Waist yaw [deg]").first.wait_for(state="visible")
             time.sleep(3)
             page.screenshot(path=str(ARTIFACTS / "plots.png"))
-            scene.get_by_role("tab", name="Controls").first.click()
+            press(scene.get_by_role("tab", name="Controls"))
 
             # Pause, then move the timeline back: the scene, the API show the kept instant.
-            scene.get_by_role("button", name="Pause").click()
+            press(scene.get_by_role("button", name="Pause"))
             state = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())["paused"] and s)
             assert state and state["shown_t"] is None
             kept = state["kept"]
@@ -115,7 +116,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             assert sought["clock"] == pytest.approx(sought["shown_t"])
             time.sleep(2)
             page.screenshot(path=str(ARTIFACTS / "scrubbed_10s_back.png"))
-            scene.get_by_role("button", name="Resume").click()
+            press(scene.get_by_role("button", name="Resume"))
             back = wait_for(
                 lambda: (
                     (s := httpx.get(f"{server}/api/state").json())["shown_t"] is None
@@ -127,13 +128,13 @@ def test_page_scene_gui_slider_timeline_and_views(server):
 
             # The camera views, and the horizon inspector at 0.4 m (Fig. 5-7).
             for view in ("side", "top"):
-                scene.get_by_role("button", name=view, exact=True).click()
+                press(scene.get_by_role("button", name=view, exact=True))
                 time.sleep(2)
                 page.screenshot(path=str(ARTIFACTS / f"view_{view}.png"))
-            scene.get_by_role("button", name="follow", exact=True).click()
+            press(scene.get_by_role("button", name="follow", exact=True))
             httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.4}})
             time.sleep(6)
-            scene.get_by_role("tab", name="Inspect").first.click()
+            press(scene.get_by_role("tab", name="Inspect"))
             scene.get_by_text("horizon 1.6 s, 16 samples").first.wait_for(state="visible")
             time.sleep(3)
             page.screenshot(path=str(ARTIFACTS / "inspector_040.png"))

@@ -19,7 +19,15 @@ import time
 import httpx
 import numpy as np
 import pytest
-from browser_util import ARTIFACTS, CHROME_ARGS, CHROMIUM, close_notice, free_port, wait_for
+from browser_util import (
+    ARTIFACTS,
+    CHROME_ARGS,
+    CHROMIUM,
+    close_notice,
+    free_port,
+    press,
+    wait_for,
+)
 
 from app.web.camera import camera_pose
 from app.web.learn_gui import COLUMNS
@@ -100,7 +108,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
                 lambda cam: reported.append((np.array(cam.position), np.array(cam.up_direction)))
             )
             close_notice(scene)
-            scene.get_by_role("tab", name="Learn").first.click(timeout=90_000)
+            press(scene.get_by_role("tab", name="Learn"))
             learn = display.views[None].panel.learn
             params = None
             t_start = time.monotonic()
@@ -111,7 +119,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
                     reported.clear()
                     button = scene.get_by_role("button", name=lesson.title).first
                     button.scroll_into_view_if_needed(timeout=30_000)
-                    button.click(timeout=60_000, no_wait_after=True)
+                    press(button)
                     params = wait_for(
                         lambda lesson=lesson: (
                             (b := httpx.get(f"{base}/api/params", timeout=5).json())["methods"]
@@ -184,7 +192,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
             print(f"{time.monotonic() - t_start:5.1f} s: all lessons checked")
             # the kinematic analysis (Fig. 1-2): eq. 5 as printed beside the paper's reading
             page.set_viewport_size(LARGE)
-            scene.get_by_text("Kinematic analysis (Fig. 1-2, eq. 1-5)").first.click()
+            press(scene.get_by_text("Kinematic analysis (Fig. 1-2, eq. 1-5)"))
             drawing = scene.get_by_text("Eq. 5 as printed").first
             drawing.wait_for(state="visible", timeout=30_000)
             drawing.evaluate("e => e.scrollIntoView({block: 'center'})")
