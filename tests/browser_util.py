@@ -79,6 +79,9 @@ def serving(*args: str) -> Iterator[tuple[str, str, subprocess.Popen]]:
         else:
             pytest.fail("serve did not answer /api/health within 120 s")
         yield base, f"http://127.0.0.1:{viser_port}/", proc
+    except BaseException:
+        print(f"--- the served tool's last output ---\n{server_log(proc)}")  # shown on failure
+        raise
     finally:
         proc.send_signal(signal.SIGINT)
         try:
@@ -127,10 +130,15 @@ def click_slider(page, frame, label: str, value: float) -> None:
 
 
 def press(locator, timeout: float = 90_000) -> None:
-    """Click a viser tab or button by dispatching the click to it: a real mouse click waits for
-    the page to take input, which a software-rendered scene can hold off past any timeout on a
-    busy 2-core machine (seen in CI); the GUI's handlers are what these tests check."""
-    locator.first.dispatch_event("click", timeout=timeout)
+    """Press a viser tab or button by dispatching the event its handler takes: a real mouse
+    click waits for the page to take input, which a software-rendered scene can hold off past
+    any timeout on a busy 2-core machine (seen in CI). viser's tabs activate on Enter (a
+    pointer-down starts a tab drag), its buttons and folders on click."""
+    el = locator.first
+    if el.get_attribute("role", timeout=timeout) == "tab":
+        el.dispatch_event("keydown", {"key": "Enter"}, timeout=timeout)
+    else:
+        el.dispatch_event("click", timeout=timeout)
 
 
 def close_notice(frame) -> None:

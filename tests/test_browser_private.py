@@ -40,6 +40,13 @@ def _step_length(base: str, sid: str) -> float:
     return httpx.get(f"{base}/api/sessions/{sid}/params", timeout=10).json()["walk"]["step_length"]
 
 
+def _diagnosis(base: str) -> str:
+    """What the server says about its sessions and viewers, for a failure's message."""
+    sessions = httpx.get(f"{base}/api/sessions", timeout=10).json()
+    health = httpx.get(f"{base}/api/health", timeout=10).json()
+    return f"sessions: {sessions}; health: {health}"
+
+
 def test_private_sessions_admission_close_and_a_worker_death():
     from playwright.sync_api import sync_playwright
 
@@ -59,22 +66,27 @@ def test_private_sessions_admission_close_and_a_worker_death():
         browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
         try:
             pages = []
-            for value in (0.25, 0.35):  # two browsers, each its own session and slider
+            for n, value in enumerate((0.25, 0.35)):  # two browsers, each its own session
+                # the previous browser's session stands alone (a late reconnect would leave one
+                # more for a moment and the next browser would be refused)
+                assert wait_for(lambda n=n: len(_private(base)) == n, timeout=60), _diagnosis(base)
                 page = browser.new_context(viewport=VIEWPORT).new_page()
                 page.goto(viser_url)
                 thumb, _track = slider(page, "Step length [m]")
                 close_notice(page)
                 click_slider(page, page, "Step length [m]", value)
                 assert float(thumb.get_attribute("aria-valuenow")) == pytest.approx(value)
+                assert wait_for(
+                    lambda v=value: any(
+                        _step_length(base, s["id"]) == pytest.approx(v) for s in _private(base)
+                    ),
+                    timeout=60,
+                ), _diagnosis(base)
                 pages.append(page)
-            sessions = wait_for(lambda: len(_private(base)) == 2 and _private(base))
-            assert sessions, _private(base)
-            lengths = wait_for(
-                lambda: (
-                    sorted(_step_length(base, s["id"]) for s in sessions) == [0.25, 0.35] and True
-                )
-            )
-            assert lengths, [_step_length(base, s["id"]) for s in sessions]
+            sessions = _private(base)
+            assert sorted(_step_length(base, s["id"]) for s in sessions) == pytest.approx(
+                [0.25, 0.35]
+            ), _diagnosis(base)
             # each one's robots take its own length from their next step; the shared demo not
             for s in sessions:
                 want = _step_length(base, s["id"])
