@@ -62,7 +62,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             assert float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.3)
             assert wait_for(
                 lambda: (
-                    httpx.get(f"{server}/api/params").json()["walk"]["step_length"]
+                    httpx.get(f"{server}/api/params", timeout=30).json()["walk"]["step_length"]
                     == pytest.approx(0.3)
                 )
             )
@@ -78,7 +78,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             )
             assert robots and all(r["params"]["step_length"] == pytest.approx(0.3) for r in robots)
             # An API change moves the slider (the GUI reflects PUT /api/params).
-            r = httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.25}})
+            r = httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.25}}, timeout=30)
             assert r.status_code == 200
             assert wait_for(
                 lambda: float(thumb.get_attribute("aria-valuenow")) == pytest.approx(0.25)
@@ -88,6 +88,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             httpx.put(
                 f"{server}/api/params",
                 json={"methods": ["fixed", "redundancy", "mpc"], "walk": {"step_length": 0.3}},
+                timeout=30,
             )
             time.sleep(12)
             page.screenshot(path=str(ARTIFACTS / "three_robots.png"))
@@ -99,7 +100,9 @@ def test_page_scene_gui_slider_timeline_and_views(server):
 
             # Pause, then move the timeline back: the scene, the API show the kept instant.
             press(scene.get_by_role("button", name="Pause"))
-            state = wait_for(lambda: (s := httpx.get(f"{server}/api/state").json())["paused"] and s)
+            state = wait_for(
+                lambda: (s := httpx.get(f"{server}/api/state", timeout=30).json())["paused"] and s
+            )
             assert state and state["shown_t"] is None
             kept = state["kept"]
             assert kept["end"] - kept["start"] > 10.0
@@ -109,7 +112,11 @@ def test_page_scene_gui_slider_timeline_and_views(server):
                 page, scene, "Timeline [s] (paused)", kept["end"] - 10.0
             )  # ten seconds back
             sought = wait_for(
-                lambda: (s := httpx.get(f"{server}/api/state").json())["shown_t"] is not None and s
+                lambda: (
+                    (s := httpx.get(f"{server}/api/state", timeout=30).json())["shown_t"]
+                    is not None
+                    and s
+                )
             )
             assert sought, "the timeline did not seek"
             assert sought["shown_t"] == pytest.approx(kept["end"] - 10.0, abs=0.5)
@@ -119,7 +126,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             press(scene.get_by_role("button", name="Resume"))
             back = wait_for(
                 lambda: (
-                    (s := httpx.get(f"{server}/api/state").json())["shown_t"] is None
+                    (s := httpx.get(f"{server}/api/state", timeout=30).json())["shown_t"] is None
                     and not s["paused"]
                     and s
                 )
@@ -132,7 +139,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
                 time.sleep(2)
                 page.screenshot(path=str(ARTIFACTS / f"view_{view}.png"))
             press(scene.get_by_role("button", name="follow", exact=True))
-            httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.4}})
+            httpx.put(f"{server}/api/params", json={"walk": {"step_length": 0.4}}, timeout=30)
             time.sleep(6)
             press(scene.get_by_role("tab", name="Inspect"))
             scene.get_by_text("horizon 1.6 s, 16 samples").first.wait_for(state="visible")

@@ -173,7 +173,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
                     fell = wait_for(
                         lambda: [
                             r
-                            for r in httpx.get(f"{base}/api/state").json()["robots"]
+                            for r in httpx.get(f"{base}/api/state", timeout=30).json()["robots"]
                             if r["falls"] >= 1
                         ],
                         60,

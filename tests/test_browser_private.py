@@ -102,7 +102,7 @@ def test_private_sessions_admission_close_and_a_worker_death():
                     timeout=120,
                 )
                 assert state, s
-            assert httpx.get(f"{base}/api/params").json()["walk"]["step_length"] == 0.2
+            assert httpx.get(f"{base}/api/params", timeout=30).json()["walk"]["step_length"] == 0.2
 
             # the third browser: beyond capacity, told so, watching the shared demo
             third = browser.new_context(viewport=VIEWPORT).new_page()
@@ -115,22 +115,24 @@ def test_private_sessions_admission_close_and_a_worker_death():
             third.context.close()
 
             # a browser that closes mid-walk ends its session and frees its robots' slots
-            free = httpx.get(f"{base}/api/sessions").json()["robot_slots_free"]
+            free = httpx.get(f"{base}/api/sessions", timeout=30).json()["robot_slots_free"]
             pages[0].context.close()
             assert wait_for(lambda: len(_private(base)) == 1, timeout=30)
-            assert httpx.get(f"{base}/api/sessions").json()["robot_slots_free"] == free + 1
+            assert (
+                httpx.get(f"{base}/api/sessions", timeout=30).json()["robot_slots_free"] == free + 1
+            )
             kept = _private(base)[0]["id"]
-            assert httpx.get(f"{base}/api/health").json()["status"] == "ok"
+            assert httpx.get(f"{base}/api/health", timeout=30).json()["status"] == "ok"
 
             # a worker killed: reported on the page and in /api/health, sessions restart (the
             # page frames the scene: that viewer takes the free slot, a private session too)
             page = browser.new_context(viewport=VIEWPORT).new_page()
             page.goto(base + "/")
-            worker = httpx.get(f"{base}/api/health").json()["workers"][0]
+            worker = httpx.get(f"{base}/api/health", timeout=30).json()["workers"][0]
             os.kill(worker["pid"], signal.SIGKILL)
             health = wait_for(
                 lambda: (
-                    (h := httpx.get(f"{base}/api/health").json())["worker_deaths"]
+                    (h := httpx.get(f"{base}/api/health", timeout=30).json())["worker_deaths"]
                     and h["status"] == "ok"
                     and h
                 ),
@@ -142,7 +144,7 @@ def test_private_sessions_admission_close_and_a_worker_death():
             assert wait_for(
                 lambda: (
                     httpx.get(  # runs on, restarted on the new worker
-                        f"{base}/api/sessions/{kept}/state"
+                        f"{base}/api/sessions/{kept}/state", timeout=30
                     ).json()["robots"][0]["t"]
                     > 1.0
                 ),

@@ -29,7 +29,10 @@ from app.web.api.models import (
     updates,
 )
 
-APPLY_TIMEOUT_S = 5.0  # how long a handler waits for the loop to take its intent
+# How long a handler waits for the loop to take its intent before answering anyway (a
+# playback answer then says "applied": false): well under the 5 s clients often default to
+# (httpx, requests' common settings), so a busy machine gives a late answer, not a timeout.
+APPLY_TIMEOUT_S = 3.0
 
 
 def _shown(session: SessionView) -> LiveFrame:
