@@ -99,6 +99,15 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             press(scene.get_by_role("tab", name="Controls"))
 
             # Pause, then move the timeline back: the scene, the API show the kept instant.
+            # (More than 12 s kept first: the robots restarted with the methods above, and on
+            # a busy machine their clock runs slower than the wall's.)
+            assert wait_for(
+                lambda: (
+                    (k := httpx.get(f"{server}/api/state", timeout=30).json()["kept"])
+                    and k["end"] - k["start"] > 12.0
+                ),
+                timeout=120,
+            )
             press(scene.get_by_role("button", name="Pause"))
             state = wait_for(
                 lambda: (s := httpx.get(f"{server}/api/state", timeout=30).json())["paused"] and s
