@@ -115,3 +115,49 @@ def test_helpers():
     groups = joint_groups([1.0] * len(JOINTS), list(JOINTS))
     assert sum(groups.values()) == len(JOINTS)  # every joint in exactly one group
     assert groups["knee"] == 2 and groups["arms"] == 6 and groups["waist"] == 1
+
+
+def _summary(**changes):
+    from app.experiments.results import RunSummary
+
+    base = dict(
+        method="fixed",
+        arms=True,
+        step_length=0.38,
+        steps_planned=10,
+        steps_completed=10,
+        success=True,
+        fell=False,
+        fall_time=None,
+        fall_reason=None,
+        clean=True,
+        landing_error_max=0.008,
+        condition_number_max=82.0,
+        speed_limited_ticks=0,
+        servo_saturation_substeps=0,
+        solver_failures=0,
+        solver_failures_by_layer={},
+        waist_yaw_max_deg=0.0,
+        yaw_momentum_peak=0.2,
+        zmp_in_support_ratio=1.0,
+        energy_two_step_windows=[],
+        sim_time=15.0,
+        kappa_liftoff=[],
+        kappa_landing=[],
+    )
+    return RunSummary.from_run({**base, **changes})
+
+
+def test_failure_reasons_name_the_clean_criterions_kappa_the_leg_columns():
+    """A run not clean only because a knee went straight (kappa of the 12 leg columns over
+    1000, J_low's own kappa 82, as the fixed pelvis at 0.38 m) says so, not 'not clean'; a
+    large J_low kappa alone is no reason (the criterion does not read it)."""
+    from app.experiments.sections import failure_reasons
+
+    knee = _summary(clean=False, condition_number_legs_max=5629.0)
+    assert knee.condition_number_legs_max == 5629.0
+    (reason,) = failure_reasons(knee)
+    assert "knee nearly straight" in reason and "5.63e+03" in reason
+    assert failure_reasons(_summary(condition_number_max=5e3, condition_number_legs_max=40.0)) == []
+    # a cause the list does not know still reads "not clean", never an empty list
+    assert failure_reasons(_summary(clean=False, condition_number_legs_max=40.0)) == ["not clean"]

@@ -66,7 +66,7 @@ class RunSummary:
     fall_reason: str | None
     clean: bool  # app.runs' criterion: see sections.failure_reasons
     landing_error_max: float | None  # [m]
-    condition_number_max: float  # kappa(J), walking phase
+    condition_number_max: float  # kappa(J) of J_low, walking phase
     speed_limited_ticks: int
     servo_saturation_substeps: int
     solver_failures: int
@@ -80,6 +80,8 @@ class RunSummary:
     kappa_landing: Samples  # ... and of each landing
     kappa_legs_liftoff: Samples = field(default_factory=list)  # the same, leg columns
     kappa_legs_landing: Samples = field(default_factory=list)
+    # kappa of J_low's 12 leg columns, walking phase: what the clean criterion reads
+    condition_number_legs_max: float | None = None
     other: dict[str, Any] = field(default_factory=dict)
 
     @classmethod

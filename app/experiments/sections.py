@@ -94,8 +94,12 @@ def failure_reasons(s: RunSummary | None) -> list[str]:
     le = s.landing_error_max
     if le is not None and le >= LANDING_ERROR_CLEAN:
         out.append(f"landing error {le * 100:.1f} cm (limit {LANDING_ERROR_CLEAN * 100:.0f} cm)")
-    if s.condition_number_max >= KAPPA_SINGULAR:
-        out.append(f"kappa(J) up to {s.condition_number_max:.3g} (limit {KAPPA_SINGULAR:.0f})")
+    legs = s.condition_number_legs_max  # the clean criterion's matrix (app.sim.summary)
+    if legs is not None and legs >= KAPPA_SINGULAR:
+        out.append(
+            f"a knee nearly straight: kappa of the leg columns up to {legs:.3g} "
+            f"(limit {KAPPA_SINGULAR:.0f})"
+        )
     if s.speed_limited_ticks:
         out.append(f"{s.speed_limited_ticks} IK ticks at the joint-speed limit")
     if s.servo_saturation_substeps:
