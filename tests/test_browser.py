@@ -113,10 +113,20 @@ def test_page_scene_gui_slider_timeline_and_views(server):
                 lambda: (s := httpx.get(f"{server}/api/state", timeout=30).json())["paused"] and s
             )
             assert state and state["shown_t"] is None
-            kept = state["kept"]
-            assert kept["end"] - kept["start"] > 10.0
             timeline, _t = slider(scene, "Timeline [s] (paused)")
             assert wait_for(lambda: timeline.get_attribute("data-disabled") is None)
+
+            def _range_shown():
+                """The kept span once the slider shows it (frames made just before the pause
+                can still arrive and move it; a click maps pixels on the slider's range)."""
+                k = httpx.get(f"{server}/api/state", timeout=30).json()["kept"]
+                lo = float(timeline.get_attribute("aria-valuemin"))
+                hi = float(timeline.get_attribute("aria-valuemax"))
+                return abs(lo - k["start"]) < 0.02 and abs(hi - k["end"]) < 0.02 and k
+
+            kept = wait_for(_range_shown, timeout=60)
+            assert kept, "the timeline never showed the kept span"
+            assert kept["end"] - kept["start"] > 10.0
             click_slider(
                 page, scene, "Timeline [s] (paused)", kept["end"] - 10.0
             )  # ten seconds back
