@@ -67,7 +67,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--workers",
         type=int,
         default=None,
-        help="worker processes running the robots (default: one per core; 0: in this process)",
+        help="worker processes running the robots (default: one per robot the machine holds, "
+        "two per core; 0: in this process)",
     )
     p.add_argument(
         "--sessions",
@@ -80,7 +81,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--robots-per-worker",
         type=positive_int,
         default=None,
-        help="robots one worker runs at once (default 2; see pelvic-walk bench)",
+        help="robots one worker runs at once (default: 1, or two per core shared out over the "
+        "--workers given; a worker's robots share one core)",
     )
     p.add_argument(
         "--display-hz",

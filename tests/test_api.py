@@ -245,6 +245,30 @@ def test_serve_refuses_a_busy_port(capsys):
         assert len(err) == 1 and "--viser-port" in err[0]
 
 
+def test_serve_refuses_workers_that_cannot_hold_the_demo(capsys):
+    """Checked before anything starts: one line, exit status 2, no traceback."""
+    from app.web.server import serve
+
+    assert serve("127.0.0.1", 1, 2, workers=1, robots_per_worker=1) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "cannot hold the 2 robots" in err[0] and "--workers" in err[0]
+
+
+def test_worker_layout_gives_every_robot_its_own_worker_by_default(monkeypatch):
+    """The robots of one worker share one core (the GIL): by default one robot per worker,
+    ROBOTS_PER_CORE per core; given only --workers, they share that many robots out."""
+    from app.web import settings
+
+    monkeypatch.setattr(settings.os, "cpu_count", lambda: 2)
+    assert settings.worker_layout(None, None) == (4, 1)
+    assert settings.worker_layout(1, None) == (1, 4)
+    assert settings.worker_layout(3, None) == (3, 2)  # 4 robots over 3 workers: 2 each at most
+    assert settings.worker_layout(None, 2) == (2, 2)
+    assert settings.worker_layout(5, 3) == (5, 3)  # both given: as given
+    monkeypatch.setattr(settings.os, "cpu_count", lambda: None)  # unknown: one core
+    assert settings.worker_layout(None, None) == (2, 1)
+
+
 def test_pages(client):
     r = client.get("/")
     assert r.status_code == 200

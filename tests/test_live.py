@@ -9,6 +9,7 @@ import pytest
 
 from app.live import FALL_RESET_S, LiveSim, check_methods, live_params
 from app.live.history import ROW_COLUMNS
+from app.live.session import CATCH_UP_S
 from controller.footsteps import plan_footsteps
 from controller.params import ControllerParams, WalkParams
 
@@ -285,7 +286,11 @@ def test_the_time_base_moves_only_for_a_loop_that_ran_late():
     now[0] = 103.0
     sim._catch_up(frame(2.0, 102.0))
     assert sim.intent.anchor == (100.0, 0.0)
-    # made 0.5 s behind its base: the base moves to where that loop was, when it was there
-    now[0] = 103.1
-    sim._catch_up(frame(1.5, 102.0))
-    assert sim.intent.anchor == (102.0, 1.5)
+    # made less than CATCH_UP_S behind: the loop catches up by itself, the base stays
+    now[0] = 104.5
+    sim._catch_up(frame(2.0 - 0.8 * CATCH_UP_S, 102.0))
+    assert sim.intent.anchor == (100.0, 0.0)
+    # made more than CATCH_UP_S behind its base: the base moves to where that loop was, then
+    behind = 2.0 - CATCH_UP_S - 0.2
+    sim._catch_up(frame(behind, 102.0))
+    assert sim.intent.anchor == (102.0, behind)

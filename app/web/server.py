@@ -2,8 +2,9 @@
 
 Processes and threads (the machine may have only two cores):
 
-- **worker processes** (``--workers``, default one per core; ``app.live.pool``) run the live
-  sessions, each paced to real time, and send their frames back; with ``--workers 0`` the
+- **worker processes** (``--workers``, default two per core, one robot each;
+  ``app.live.pool``) run the live sessions, each paced to real time, and send their frames
+  back; with ``--workers 0`` the
   shared session runs in a thread of this process instead;
 - the **display** thread (:class:`~app.web.view.Display`) draws each view's shown frame at
   most ``--display-hz`` times a second; viser's own thread sends the scene to the browsers;
@@ -39,7 +40,7 @@ from app.live.pool import WorkerPool
 from app.live.registry import SessionRegistry
 from app.live.session import initial_intent
 from app.web.api import create_app
-from app.web.settings import Settings
+from app.web.settings import Settings, worker_layout
 from app.web.view import Display
 
 log = logging.getLogger(__name__)
@@ -121,13 +122,20 @@ def serve(
         return _fail(f"--{'-'.join(map(str, err['loc'])).replace('_', '-')}: {err['msg']}")
     host, port, viser_port = settings.host, settings.port, settings.viser_port
     report_dir, sessions = settings.report_dir, settings.sessions
-    workers = settings.workers if settings.workers is not None else (os.cpu_count() or 1)
-    robots_per_worker, display_hz = settings.robots_per_worker, settings.display_hz
+    workers, robots_per_worker = worker_layout(settings.workers, settings.robots_per_worker)
+    display_hz = settings.display_hz
     idle_timeout = settings.idle_timeout
     if port == viser_port:
         return _fail(f"--port and --viser-port must differ (both {port})")
     if sessions == "private" and workers < 1:
         return _fail("--sessions private needs worker processes (--workers 1 or more)")
+    intent = initial_intent(methods=methods) if methods else initial_intent()
+    if workers and len(intent.methods) > workers * robots_per_worker:
+        return _fail(
+            f"{workers} worker(s) x {robots_per_worker} robot(s) cannot hold the"
+            f" {len(intent.methods)} robots of the demo; give more --workers or"
+            " --robots-per-worker"
+        )
     if not port_free(host, port):
         return _fail(f"port {port} on {host} is in use; choose another with --port")
     if not port_free(host, viser_port):
@@ -139,7 +147,6 @@ def serve(
         return _fail(f"port {viser_port} on {host} is in use; choose another with --viser-port")
 
     pool = WorkerPool(workers, robots_per_worker, display_hz).start() if workers else None
-    intent = initial_intent(methods=methods) if methods else initial_intent()
     registry = SessionRegistry.start(sessions, intent, pool, idle_timeout)
     display = Display(viser_server, registry, display_hz).start()
     app = create_app(

@@ -9,11 +9,30 @@ and ``PELVIC_WALK_IDLE_TIMEOUT`` override the defaults; command-line options ove
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 from typing import Literal
 
 from pydantic import Field, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
+
+ROBOTS_PER_CORE = 2  # a core holds about two robots at 1.0x (`pelvic-walk bench`)
+
+
+def worker_layout(workers: int | None, robots_per_worker: int | None) -> tuple[int, int]:
+    """(worker processes, robots each) from the options given (None: not given).
+
+    The robots of one worker take turns on one core (Python's GIL), so by default every robot
+    gets a worker of its own and the operating system spreads them over the cores: as many
+    workers as the machine holds robots, ROBOTS_PER_CORE per core. Given only ``workers``,
+    each holds its share of that many robots; 0 workers run the robots in the web process.
+    """
+    capacity = ROBOTS_PER_CORE * (os.cpu_count() or 1)
+    if workers is None:
+        workers = capacity // (robots_per_worker or 1) or 1
+    if robots_per_worker is None:
+        robots_per_worker = max(1, -(-capacity // max(workers, 1)))  # ceil
+    return workers, robots_per_worker
 
 
 class Settings(BaseSettings):
@@ -26,9 +45,12 @@ class Settings(BaseSettings):
     viser_port: int = Field(default=8080, ge=1, le=65535)  # viser (3-D scene and GUI)
     # None: the latest `pelvic-walk experiments --out DIR`, else the packaged reference report
     report_dir: Path | None = None
-    workers: int | None = Field(default=None, ge=0, le=64)  # None: one per core; 0: in-process
+    # None for both: one robot per worker, ROBOTS_PER_CORE per core (worker_layout); 2 robots
+    # sharing one worker ran at 0.86x under 20 viewers, one each at 1.0x (README, "A
+    # classroom at real time"). workers 0: the robots run in the web process.
+    workers: int | None = Field(default=None, ge=0, le=64)
     sessions: Literal["shared", "private"] = "shared"
-    robots_per_worker: int = Field(default=2, ge=1, le=16)  # robots one worker runs at once
+    robots_per_worker: int | None = Field(default=None, ge=1, le=16)  # robots one worker runs
     display_hz: float = Field(default=20.0, ge=1.0, le=60.0)  # scene updates per second
     idle_timeout: float = Field(default=300.0, ge=5.0)  # [s] an API-opened session's life
     # how much lower than the workers the web and display threads run (Linux nice steps): when
