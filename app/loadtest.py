@@ -234,12 +234,16 @@ def _wait_healthy(base: str, proc: subprocess.Popen | None, timeout: float = 120
     raise RuntimeError(f"no server answered at {base} within {timeout:.0f} s")
 
 
+def _below(r: dict[str, Any], level: float) -> int:
+    return sum(1 for x in r["realtime_factor_samples"] if x < level)
+
+
 def format_report(r: dict[str, Any]) -> str:
     med, lo = r["realtime_factor_median"], r["realtime_factor_min"]
     lines = [
         f"loadtest: {r['viewers']} viewers, {r['robots']} robots, {r['seconds']:.0f} s",
         f"real-time factor   median {med:.3f}   min {lo:.3f}   "
-        f"({len(r['realtime_factor_samples'])} samples, 1 s apart)"
+        f"({len(r['realtime_factor_samples'])} samples, 1 s apart; {_below(r, 0.9)} below 0.9)"
         if med is not None
         else "real-time factor   no samples",
         f"sent per viewer    {r['bytes_per_viewer_per_s'] / 1e3:.1f} KB/s (max "

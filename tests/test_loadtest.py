@@ -23,6 +23,8 @@ def test_a_short_load_reports_real_time_bytes_and_memory():
     assert r["health"]["status"] == "ok"
     text = format_report(r)
     assert "real-time factor" in text and "KB/s" in text and "after warm-up" in text
+    below = sum(x < 0.9 for x in r["realtime_factor_samples"])
+    assert f"; {below} below 0.9)" in text
 
 
 def test_lower_priority_spares_the_kept_threads():
