@@ -267,6 +267,8 @@ def test_worker_layout_gives_every_robot_its_own_worker_by_default(monkeypatch):
     assert settings.worker_layout(5, 3) == (5, 3)  # both given: as given
     monkeypatch.setattr(settings.os, "cpu_count", lambda: None)  # unknown: one core
     assert settings.worker_layout(None, None) == (2, 1)
+    monkeypatch.setattr(settings.os, "cpu_count", lambda: 32)  # a big machine: capped workers
+    assert settings.worker_layout(None, None) == (settings.MAX_DEFAULT_WORKERS, 4)
 
 
 def test_pages(client):

@@ -17,6 +17,7 @@ from pydantic import Field, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 ROBOTS_PER_CORE = 2  # a core holds about two robots at 1.0x (`pelvic-walk bench`)
+MAX_DEFAULT_WORKERS = 16  # each worker holds MuJoCo and Pinocchio (~130 MB resident)
 
 
 def worker_layout(workers: int | None, robots_per_worker: int | None) -> tuple[int, int]:
@@ -24,12 +25,13 @@ def worker_layout(workers: int | None, robots_per_worker: int | None) -> tuple[i
 
     The robots of one worker take turns on one core (Python's GIL), so by default every robot
     gets a worker of its own and the operating system spreads them over the cores: as many
-    workers as the machine holds robots, ROBOTS_PER_CORE per core. Given only ``workers``,
-    each holds its share of that many robots; 0 workers run the robots in the web process.
+    workers as the machine holds robots, ROBOTS_PER_CORE per core (at most
+    MAX_DEFAULT_WORKERS, which then share the robots out). Given only ``workers``, each holds
+    its share of that many robots; 0 workers run the robots in the web process.
     """
     capacity = ROBOTS_PER_CORE * (os.cpu_count() or 1)
     if workers is None:
-        workers = capacity // (robots_per_worker or 1) or 1
+        workers = min(capacity // (robots_per_worker or 1), MAX_DEFAULT_WORKERS) or 1
     if robots_per_worker is None:
         robots_per_worker = max(1, -(-capacity // max(workers, 1)))  # ceil
     return workers, robots_per_worker
@@ -45,9 +47,10 @@ class Settings(BaseSettings):
     viser_port: int = Field(default=8080, ge=1, le=65535)  # viser (3-D scene and GUI)
     # None: the latest `pelvic-walk experiments --out DIR`, else the packaged reference report
     report_dir: Path | None = None
-    # None for both: one robot per worker, ROBOTS_PER_CORE per core (worker_layout); 2 robots
-    # sharing one worker ran at 0.86x under 20 viewers, one each at 1.0x (README, "A
-    # classroom at real time"). workers 0: the robots run in the web process.
+    # None for both: one robot per worker, ROBOTS_PER_CORE per core (worker_layout). With 20
+    # viewers on 2 cores, 2 robots sharing a worker kept a median real-time factor of 0.96
+    # (min 0.79), one per worker 0.99-1.0 (README, "A classroom at real time").
+    # workers 0: the robots run in the web process.
     workers: int | None = Field(default=None, ge=0, le=64)
     sessions: Literal["shared", "private"] = "shared"
     robots_per_worker: int | None = Field(default=None, ge=1, le=16)  # robots one worker runs
