@@ -90,6 +90,45 @@ def test_pacing_sleeps_to_the_wall_clock():
         sim.stop()
 
 
+def test_the_loop_wakes_once_per_frame_and_leads_by_less_than_one():
+    """The ticks between two frames run back to back and the loop then sleeps off its lead on
+    the time base: with a tick costing 2 ms of a 5-ms period it sleeps about once per frame
+    (not once per tick), keeps real time, and leads the time base by less than a display
+    interval plus a tick (what a frame can show ahead of the wall clock)."""
+    import dataclasses
+
+    from app.live.loop import LiveLoop
+    from app.live.session import initial_intent
+
+    wall = FakeWallClock()
+    cost = 0.002  # [s] of wall time each iteration takes
+
+    intent = dataclasses.replace(initial_intent(short_params(3), ["fixed"]), anchor=(0.0, 0.0))
+    frames, sleeps, leads = [], [], []
+
+    def intents():
+        with wall.lock:
+            wall.now += cost
+        return intent
+
+    def sleep(seconds: float) -> None:
+        sleeps.append(seconds)
+        wall.sleep(seconds)
+
+    def publish(frame) -> None:
+        frames.append(frame)
+        leads.append(frame.clock - wall.clock())
+
+    loop = LiveLoop(intents, publish, clock=wall.clock, sleep=sleep, publish_hz=30.0)
+    while loop.clock < 3.0:
+        loop.iterate()
+    ticks = round(loop.clock / DT)
+    assert len(frames) == pytest.approx(3.0 * 30, rel=0.15)  # the display rate on the wall
+    assert len(sleeps) <= 1.2 * len(frames) < ticks / 4  # one wake a frame, not one a tick
+    assert 0 < max(leads) < loop.publish_interval + DT
+    assert loop.clock / wall.clock() == pytest.approx(1.0, abs=0.02)  # real time kept
+
+
 @pytest.fixture
 def running():
     sims: list[LiveSim] = []
