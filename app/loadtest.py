@@ -10,6 +10,11 @@ samples), bytes per viewer per second, and the server's memory (when it started 
 once the warm-up is over (the first fifth of the run: the kept history fills up and every
 viewer has its scene) and at the end. Traffic goes to 127.0.0.1 only.
 
+When it started the server it also reads, once a second, the CPU [cores] of the serving
+process and of each worker process (Linux ``/proc``) and the machine's idle cores, and
+reports their means and their means over the 3-s windows of the samples below 0.9: whether
+a dip came with the robots' workers short of CPU (the machine full) or not.
+
 In a class the viewers run on the students' machines. Here they share the server's cores, so
 they run in a thread ``VIEWER_NICE`` nice steps below the server: they take the CPU the server
 leaves, as other machines would, instead of competing with the robots for it.
@@ -36,6 +41,7 @@ METHOD_SETS = {1: ["mpc"], 2: ["fixed", "mpc"], 3: ["fixed", "redundancy", "mpc"
 WARMUP_S = 5.0  # [s] after the viewers connect, before sampling
 MEMORY_WARMUP_SHARE = 0.2  # the server's memory is compared from this share of the run on
 VIEWER_NICE = 10  # nice steps of the viewers' thread (0: same priority as the server)
+CLK_TCK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100  # /proc time unit [1/s]
 
 
 def free_port() -> int:
@@ -56,6 +62,87 @@ def rss_mb(pid: int) -> float | None:
         except OSError:
             continue
     return total / 1024 if found else None
+
+
+def _cpu_seconds(pid: int) -> float | None:
+    """User + system CPU time of one process [s] (Linux /proc), None when it is gone."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return None
+    return (int(fields[11]) + int(fields[12])) / CLK_TCK  # utime, stime (man 5 proc)
+
+
+def _idle_seconds() -> float | None:
+    """Idle + iowait time of all CPUs since boot [s] (Linux /proc/stat)."""
+    try:
+        fields = Path("/proc/stat").read_text().split("\n", 1)[0].split()
+    except OSError:
+        return None
+    return (int(fields[4]) + int(fields[5])) / CLK_TCK
+
+
+class CpuMeter:
+    """CPU [cores] of a server and its worker processes, and the machine's idle cores, over
+    the time between two :meth:`sample` calls (Linux; elsewhere every sample is None)."""
+
+    def __init__(self, pid: int):
+        self.pid = pid
+        self._last = self._read()
+
+    def _read(self) -> tuple[float, dict[int, float], float | None]:
+        procs = {p: _cpu_seconds(p) for p in [self.pid, *_children(self.pid)]}
+        return time.monotonic(), {p: c for p, c in procs.items() if c is not None}, _idle_seconds()
+
+    def sample(self) -> dict[str, Any] | None:
+        """{"server": cores, "workers": [cores, ...] (busiest first), "idle": cores}."""
+        (t0, p0, i0), (t1, p1, i1) = self._last, self._read()
+        self._last = (t1, p1, i1)
+        dt = t1 - t0
+        if dt <= 0 or self.pid not in p1 or self.pid not in p0 or i0 is None or i1 is None:
+            return None
+        workers = [(p1[p] - p0[p]) / dt for p in p1 if p != self.pid and p in p0]
+        return {
+            "server": (p1[self.pid] - p0[self.pid]) / dt,
+            "workers": sorted(workers, reverse=True),
+            "idle": (i1 - i0) / dt,
+        }
+
+
+def cpu_summary(
+    samples: list[dict[str, Any] | None], rtf: list[float], level: float = 0.9, window: int = 3
+) -> dict[str, Any] | None:
+    """Mean CPU of ``samples`` (one a second, as :meth:`CpuMeter.sample` returns them) over
+    the run and over the ``window`` samples ending at each real-time factor below ``level``
+    (the factor is measured over the last 3 s). ``rtf[i]`` and ``samples[i]`` are read at the
+    same second; None when there is no CPU sample."""
+
+    def mean(rows: list[dict[str, Any]]) -> dict[str, Any] | None:
+        if not rows:
+            return None
+        n = max(len(r["workers"]) for r in rows)
+        return {
+            "server": statistics.fmean(r["server"] for r in rows),
+            "workers": [
+                statistics.fmean(r["workers"][k] if k < len(r["workers"]) else 0.0 for r in rows)
+                for k in range(n)
+            ],
+            "idle": statistics.fmean(r["idle"] for r in rows),
+        }
+
+    rows = [r for r in samples if r is not None]
+    if not rows:
+        return None
+    dips = sorted(
+        {
+            j
+            for i, x in enumerate(rtf)
+            if x < level
+            for j in range(max(0, i - window + 1), i + 1)
+            if j < len(samples) and samples[j] is not None
+        }
+    )
+    return {"run": mean(rows), "below": mean([samples[j] for j in dips]), "level": level}
 
 
 def _children(pid: int) -> list[int]:
@@ -83,7 +170,12 @@ async def _viewer(url: str, subprotocol: str, counter: list[int], stop: asyncio.
 
 
 async def _run(
-    base: str, viser_url: str, viewers: int, seconds: float, memory=lambda: None
+    base: str,
+    viser_url: str,
+    viewers: int,
+    seconds: float,
+    memory=lambda: None,
+    cpu=lambda: None,
 ) -> dict[str, Any]:
     import viser
 
@@ -92,15 +184,17 @@ async def _run(
     stop = asyncio.Event()
     tasks = [asyncio.create_task(_viewer(viser_url, subprotocol, c, stop)) for c in counters]
     rtf: list[float] = []
+    cpu_samples: list[dict[str, Any] | None] = []  # read with each factor sample
     rates: list[float] = []
     async with httpx.AsyncClient(timeout=10) as client:
         await asyncio.sleep(WARMUP_S)
         t0, b0 = time.monotonic(), sum(c[0] for c in counters)
         last_t, last_b = t0, b0
         mem_warm, mem_peak = None, None
+        cpu()  # the meter's first interval starts here
         while time.monotonic() - t0 < seconds:
             await asyncio.sleep(1.0)
-            mem = memory()
+            mem, used = memory(), cpu()
             if mem is not None and time.monotonic() - t0 >= MEMORY_WARMUP_SHARE * seconds:
                 mem_warm = mem if mem_warm is None else mem_warm
                 mem_peak = max(mem, mem_peak or mem)
@@ -110,6 +204,7 @@ async def _run(
             state = (await client.get(f"{base}/api/state")).json()
             if state.get("realtime_factor") is not None:
                 rtf.append(float(state["realtime_factor"]))
+                cpu_samples.append(used)
             now, b = time.monotonic(), sum(c[0] for c in counters)
             rates.append((b - last_b) / (now - last_t) / max(viewers, 1))
             last_t, last_b = now, b
@@ -127,6 +222,8 @@ async def _run(
         "bytes_per_viewer_per_s_max": max(rates) if rates else None,
         "memory_mb_after_warmup": mem_warm,
         "memory_mb_peak": mem_peak,
+        "cpu_samples": cpu_samples,
+        "cpu": cpu_summary(cpu_samples, rtf),
     }
 
 
@@ -169,8 +266,17 @@ def run_loadtest(
         r.raise_for_status()
         mem0 = rss_mb(proc.pid) if proc else None
         memory = (lambda: rss_mb(proc.pid)) if proc else (lambda: None)
+        meter = CpuMeter(proc.pid) if proc else None
         out = _in_viewer_thread(
-            _run(base, f"ws://127.0.0.1:{viser_port}", viewers, seconds, memory), viewer_nice
+            _run(
+                base,
+                f"ws://127.0.0.1:{viser_port}",
+                viewers,
+                seconds,
+                memory,
+                meter.sample if meter else (lambda: None),
+            ),
+            viewer_nice,
         )
         out.update(
             robots=robots,
@@ -256,7 +362,23 @@ def format_report(r: dict[str, Any]) -> str:
             f"at the end ({r['memory_growth_percent']:+.1f} % since warm-up, peak "
             f"{r['memory_mb_peak']:.0f} MB)"
         )
+    cpu = r.get("cpu")
+    if cpu is not None:
+        lines.append(f"CPU [cores]        {_cpu_text(cpu['run'])} (mean over the run)")
+        if cpu["below"] is not None:
+            lines.append(
+                f"                   {_cpu_text(cpu['below'])} (mean over the 3-s windows "
+                f"below {cpu['level']})"
+            )
     return "\n".join(lines)
+
+
+def _cpu_text(c: dict[str, Any]) -> str:
+    workers = " ".join(f"{w:.2f}" for w in c["workers"]) or "none"
+    return (
+        f"serving process {c['server']:.2f}, its child processes (the workers) {workers}, "
+        f"machine idle {c['idle']:.2f}"
+    )
 
 
 def main(

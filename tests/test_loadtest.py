@@ -8,8 +8,11 @@ import os
 import subprocess
 import sys
 import textwrap
+import time
 
-from app.loadtest import format_report, run_loadtest
+import pytest
+
+from app.loadtest import CpuMeter, cpu_summary, format_report, run_loadtest
 
 
 def test_a_short_load_reports_real_time_bytes_and_memory():
@@ -25,6 +28,57 @@ def test_a_short_load_reports_real_time_bytes_and_memory():
     assert "real-time factor" in text and "KB/s" in text and "after warm-up" in text
     below = sum(x < 0.9 for x in r["realtime_factor_samples"])
     assert f"; {below} below 0.9)" in text
+    # the CPU read with each factor sample (Linux /proc): the serving process did work
+    assert len(r["cpu_samples"]) == len(r["realtime_factor_samples"])
+    assert r["cpu"]["run"]["server"] > 0 and r["cpu"]["run"]["idle"] >= 0
+    assert "CPU [cores]        serving process" in text and "child processes" in text
+
+
+def _cpu(server, workers, idle):
+    return {"server": server, "workers": workers, "idle": idle}
+
+
+def _same(a, b) -> bool:
+    return (
+        a["server"] == pytest.approx(b["server"])
+        and a["workers"] == pytest.approx(b["workers"])
+        and a["idle"] == pytest.approx(b["idle"])
+    )
+
+
+def test_cpu_summary_averages_the_run_and_the_windows_of_the_dips():
+    calm = _cpu(0.3, [0.5, 0.4], 0.2)
+    busy = [_cpu(0.1, [0.6, 0.6], 0.1), _cpu(0.1, [0.7, 0.6], 0.0), _cpu(0.4, [0.8, 0.6], 0.2)]
+    samples = [calm] * 5 + busy + [calm] * 2
+    rtf = [1.0] * 7 + [0.85] + [1.0] * 2  # the dip's 3-s window: samples 5-7
+    c = cpu_summary(samples, rtf)
+    assert c["run"]["server"] == pytest.approx((7 * 0.3 + 0.6) / 10)
+    assert c["run"]["workers"] == pytest.approx([(7 * 0.5 + 2.1) / 10, (7 * 0.4 + 1.8) / 10])
+    assert _same(c["below"], _cpu(0.2, [0.7, 0.6], 0.1))
+    # no dip, no "below"; a dip in the first second has a window of one; gaps are skipped
+    assert cpu_summary(samples, [1.0] * 10)["below"] is None
+    early = cpu_summary([_cpu(0.2, [0.9], 0.0), None, _cpu(0.3, [0.1], 1.0)], [0.5, 1, 1])
+    assert _same(early["below"], _cpu(0.2, [0.9], 0.0))
+    assert early["run"]["idle"] == pytest.approx(0.5)
+    assert cpu_summary([None, None], [0.5, 0.5]) is None
+    # workers that came and went: the missing ones count as idle in the mean
+    uneven = cpu_summary([_cpu(0, [0.8, 0.4], 0), _cpu(0, [0.6], 0)], [1, 1])
+    assert uneven["run"]["workers"] == pytest.approx([0.7, 0.2])
+
+
+def test_cpu_meter_reads_this_process_and_its_children():
+    child = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])
+    try:
+        meter = CpuMeter(os.getpid())
+        spent = time.process_time() + 0.2
+        while time.process_time() < spent:  # 0.2 s of CPU, however long it takes
+            pass
+        c = meter.sample()
+        assert c is not None and c["server"] > 0 and c["idle"] >= 0
+        assert len(c["workers"]) >= 1  # the child
+    finally:
+        child.kill()
+        child.wait()
 
 
 def test_lower_priority_spares_the_kept_threads():
