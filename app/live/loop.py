@@ -21,12 +21,12 @@ latest :class:`~app.live.intent.Intent` from a callable and hands each
 
 Why bursts: a thread that sleeps after every 5-ms tick wakes 200 times a second, and a tick
 right after a wake costs more CPU (ticks alone, ``time.sleep(0.0025)`` after each: 2.45 ms
-of CPU a tick against 1.85 ms back to back; the cause, cold caches or the virtual CPU's
-idle states, is not measured). Per-thread CPU from ``/proc`` on the
-2-core machine, ``serve`` with no viewers: one robot 0.61 of a core paced per tick, 0.48 in
-bursts; three robots 0.51-0.53 each, 0.42-0.47. Under ``loadtest --viewers 20 --robots 3``
-(two rounds of 60 s each): 0.53-0.56 per tick, 0.46-0.53 in bursts. A frame shows the robots
-at most one display interval (plus a tick) ahead of the time base, too little to see.
+of CPU a tick against 1.79-1.90 ms back to back; the cause, cold caches or the virtual CPU's
+idle states, is not measured). Per-thread CPU from ``/proc`` on the 2-core machine, ``serve``
+with no viewers: one robot 0.61 of a core paced per tick, 0.48 in bursts; three robots
+0.51-0.53 each, 0.42-0.47. Under ``loadtest --viewers 20 --robots 3`` (two rounds of 60 s
+each): 0.53-0.56 per tick, 0.46-0.53 in bursts. A frame shows the robots at most one display
+interval (plus a tick) ahead of the time base, too little to see.
 
 Time base: the intent carries the session's anchor (a session clock at a monotonic wall
 time, and the speed), so loops running parts of one session in different processes keep the
