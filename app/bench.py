@@ -23,6 +23,11 @@ Everything comes from one invocation, on one robot, headless:
    (measured once outside the repository, see ``PEER``; placo is not a dependency).
 5. **CPU time**: the ``*_cpu`` extras repeat the figures in CPU time of this process
    (``tick_ms_cpu_*`` from a second session), which other jobs on the machine disturb less.
+6. **Paced at 1x** (``paced_core_share``): one robot in a live loop with real sleeps, as a
+   worker runs it (frames at the default display rate), for ``ticks`` x 5 ms of wall time after
+   it has caught up with its time base: the CPU time of its thread per simulated second, i.e.
+   the share of a core a robot takes at real time, sleeps and wake-ups included (what limits how
+   many robots a core holds: ``robots_per_core_paced``).
 
 Timings are wall-clock and depend on the machine and its load: ``machine`` records the CPU
 count and the load averages at the start and the end of the run.
@@ -30,6 +35,7 @@ count and the load averages at the start and the end of the run.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -153,6 +159,36 @@ def live_loop(ticks: int) -> dict[str, Any]:
         # headroom kept for frames, plot rows and the scheduler of a busy machine
         "robots_per_worker": max(1, int(np.floor(0.8 * rtf))),
         "frame_bytes_per_s": sent[0] / (time.perf_counter() - start),
+    }
+
+
+def paced_loop(ticks: int) -> dict[str, Any]:
+    """One robot in a live loop paced to the wall clock at 1x (module docstring, item 6)."""
+    from app.live.loop import LiveLoop
+    from app.live.session import initial_intent
+    from app.web.settings import Settings
+
+    params = bench_params(ticks + 600)
+    display_hz = Settings.model_fields["display_hz"].default  # what `serve` sends workers
+    # the time base starts now, so the robot is built on time and walks at once
+    intent = dataclasses.replace(initial_intent(params, [METHOD]), anchor=(time.monotonic(), 0.0))
+    loop = LiveLoop(lambda: intent, lambda _frame: None, publish_hz=display_hz)
+    loop.iterate()  # build the robot
+    walking = loop.robots[METHOD].session.plan.t_start + 0.2  # [s] past the initial stand
+    deadline = time.monotonic() + 20.0
+    while loop.clock < walking or loop.ahead(intent) < -0.01:  # then caught up
+        loop.iterate()
+        if time.monotonic() > deadline:  # a machine too busy to catch up: measure anyway
+            break
+    cpu0, clock0, wall0 = time.thread_time(), loop.clock, time.monotonic()
+    seconds = ticks * intent.params.control_dt
+    while time.monotonic() - wall0 < seconds:
+        loop.iterate()
+    share = (time.thread_time() - cpu0) / max(loop.clock - clock0, 1e-9)
+    return {
+        "paced_core_share": share,
+        "paced_realtime_factor": (loop.clock - clock0) / (time.monotonic() - wall0),
+        "robots_per_core_paced": max(1, int(np.floor(1.0 / share))),
     }
 
 
@@ -311,6 +347,7 @@ def run_bench(ticks: int = 600) -> dict[str, Any]:
     bare_rtf_cpu = bare_sim / bare_cpu
     tick_cpu = tick_cpu_ms(ticks)
     live = live_loop(ticks)
+    paced = paced_loop(ticks)
     qp = compare_backends(record_qps(ticks))
     return {
         "tick_ms_median": loop["tick_ms_median"],
@@ -322,6 +359,7 @@ def run_bench(ticks: int = 600) -> dict[str, Any]:
         "robots_per_worker": live["robots_per_worker"],
         "live_loop_realtime_factor": live["live_loop_realtime_factor"],
         "time_split_ms": loop["time_split_ms"],
+        **paced,
         # extras
         "tick_ms_max": loop["tick_ms_max"],
         "tick_ms_cpu_median": float(np.median(tick_cpu)),
@@ -375,6 +413,9 @@ def format_report(r: dict[str, Any]) -> str:
         + "  [ms]",
         f"live loop            real-time factor {r['live_loop_realtime_factor']:.1f} (one "
         f"robot, frames included): a worker holds {r['robots_per_worker']} robots at 1.0x",
+        f"paced at 1x          {r['paced_core_share']:.2f} of a core per robot (CPU per "
+        f"simulated second, sleeps included; factor {r['paced_realtime_factor']:.2f}): a core "
+        f"holds {r['robots_per_core_paced']} robots at 1.0x",
         f"real-time factor     closed loop {r['realtime_factor']:.1f}   MuJoCo alone "
         f"{r['bare_step_realtime_factor']:.1f}   overhead ratio {r['overhead_ratio']:.2f}   "
         f"(CPU time: {r['realtime_factor_cpu']:.1f} / {r['bare_step_realtime_factor_cpu']:.1f}"

@@ -67,3 +67,10 @@ def test_the_walk_did_not_fall_and_the_peer_is_quoted(report):
 def test_bad_ticks_exit_2(capsys):
     assert main(None, ticks=0) == 2
     assert "ticks" in capsys.readouterr().err
+
+
+def test_paced_share_is_cpu_per_simulated_second(report):
+    """One robot paced at 1x: its share of a core and how many a core holds follow from it."""
+    share = report["paced_core_share"]
+    assert _finite_positive(share) and _finite_positive(report["paced_realtime_factor"])
+    assert report["robots_per_core_paced"] == max(1, math.floor(1.0 / share))

@@ -201,7 +201,7 @@ class LiveLoop:
             return
         # A frame is due after a display interval of wall time, or, while ahead of the time
         # base, of simulated time (x speed): the burst of ticks ends with it (step 5).
-        ahead = self._ahead(intent)
+        ahead = self.ahead(intent)
         if now - self._last_publish >= self.publish_interval or (
             ahead > 0
             and self.clock - self._last_publish_clock >= self.publish_interval * intent.speed - 1e-9
@@ -454,12 +454,12 @@ class LiveLoop:
             return clock0
         return clock0 + (self._clock() - wall0) * intent.speed
 
-    def _ahead(self, intent: Intent) -> float:
+    def ahead(self, intent: Intent) -> float:
         """[s] of wall time the loop leads its time base by (< 0: behind)."""
         return (self.clock - self._target(intent)) / intent.speed
 
     def _pace(self, intent: Intent) -> None:
         """Sleep while ahead of the time base; while behind, run on without sleeping."""
-        ahead = self._ahead(intent)
+        ahead = self.ahead(intent)
         if ahead > 0:
             self._sleep(ahead)
