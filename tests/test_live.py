@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import threading
 
 import numpy as np
@@ -9,7 +10,8 @@ import pytest
 
 from app.live import FALL_RESET_S, LiveSim, check_methods, live_params
 from app.live.history import ROW_COLUMNS
-from app.live.session import CATCH_UP_S
+from app.live.loop import LiveLoop
+from app.live.session import CATCH_UP_S, initial_intent
 from controller.footsteps import plan_footsteps
 from controller.params import ControllerParams, WalkParams
 
@@ -95,11 +97,6 @@ def test_the_loop_wakes_once_per_frame_and_leads_by_less_than_one():
     the time base: with a tick costing 2 ms of a 5-ms period it sleeps about once per frame
     (not once per tick), keeps real time, and leads the time base by less than a display
     interval plus a tick (what a frame can show ahead of the wall clock)."""
-    import dataclasses
-
-    from app.live.loop import LiveLoop
-    from app.live.session import initial_intent
-
     wall = FakeWallClock()
     cost = 0.002  # [s] of wall time each iteration takes
 
