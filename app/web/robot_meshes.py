@@ -1,5 +1,5 @@
 """Every robot as three batched meshes (a unit box, cylinder and sphere, instanced per geom
-with per-axis scales and colours): a frame moves all robots with six arrays."""
+with per-axis scales and colours): a frame moves all robots with five arrays."""
 
 from __future__ import annotations
 
@@ -17,7 +17,8 @@ TINTED_GEOMS = ("torso", "head")  # drawn in the robot's method colour
 
 class RobotMeshes:
     """Every robot as three batched meshes, a unit box, cylinder and sphere scaled per
-    instance (a capsule is a cylinder and two spheres): six arrays move all robots."""
+    instance (a capsule is a cylinder and two spheres): five arrays move all robots (a sphere,
+    scaled alike on every axis, needs no orientation)."""
 
     def __init__(self, scene: Any, model: Any, parent: str):
         self.scene, self.parent = scene, parent
@@ -99,9 +100,11 @@ class RobotMeshes:
             xmat = np.stack([r.body_xmat[body] for r in robots]).astype(float)  # (n, k, 3, 3)
             world = xpos + np.einsum("nkij,kj->nki", xmat, pos)
             world[:, :, :2] += offsets[:, None, :]
-            rot = np.einsum("nkij,kjl->nkil", xmat, R).reshape(-1, 3, 3)
             h = self.handles[kind]
             h.batched_positions = world.reshape(-1, 3).astype(np.float32)
+            if kind == "sphere":
+                continue  # a sphere, scaled alike on every axis, looks the same turned
+            rot = np.einsum("nkij,kjl->nkil", xmat, R).reshape(-1, 3, 3)
             h.batched_wxyzs = vtf.SO3.from_matrix(rot).wxyz.astype(np.float32)
 
     def set_visible(self, visible: bool) -> None:

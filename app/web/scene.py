@@ -7,11 +7,12 @@ updates viser handles; nothing here touches the simulation. ``target`` is a
 
 Lean by design (every message is serialised once per viewer): the robots of all methods are
 three batched meshes (a unit box, cylinder and sphere, instanced per geom with per-axis scales
-and colours: a capsule is a cylinder and two spheres), so a frame moves them with six arrays;
-each overlay is one handle for all robots; world-fixed overlays sit under one frame that
-follows the robots, so they are re-sent only when they change; overlays are refreshed at
-``OVERLAY_HZ`` and labels at ``LABEL_HZ``. Each robot wears its method's colour
-(``METHOD_INFO``) on its torso and head; no other overlay uses the method colours.
+and colours: a capsule is a cylinder and two spheres), so a frame moves them with five arrays
+(a sphere needs no orientation); each overlay is one handle for all robots; world-fixed
+overlays sit under one frame that follows the robots, so they are re-sent only when they
+change; overlays are refreshed at ``OVERLAY_HZ`` and labels at ``LABEL_HZ``. Each robot wears
+its method's colour (``METHOD_INFO``) on its torso and head; no other overlay uses the method
+colours.
 
 Layout: robot ``slot`` i of n walks at y = ((n - 1) / 2 - i) * ``ROBOT_SPACING``; the world
 (robots, overlays, floor) is shifted back in x by the robots' mean progress, so the robots
