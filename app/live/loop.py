@@ -195,17 +195,24 @@ class LiveLoop:
             self._tick_all(intent)
         self._busy += self._clock() - t0
         now = self._clock()
-        self._rates.add(now, self.clock, self._busy)
         if intent.paused:
             self._publish(intent)
             return
-        # A frame is due after a display interval of wall time, or, while ahead of the time
-        # base, of simulated time (x speed): the burst of ticks ends with it (step 5).
-        ahead = self.ahead(intent)
-        if now - self._last_publish >= self.publish_interval or (
-            ahead > 0
-            and self.clock - self._last_publish_clock >= self.publish_interval * intent.speed - 1e-9
-        ):
+        # A frame is due, and the burst of ticks ends with it (step 5), after a display
+        # interval of simulated time (x speed) while ahead of the time base, or of wall time
+        # while behind. (Wall time alone while ahead ended every other burst early after a long
+        # sleep where the interval is not whole ticks: frames alternated 4 and 7 ticks at 30 Hz.)
+        due = (
+            self.clock - self._last_publish_clock >= self.publish_interval * intent.speed - 1e-9
+            if self.ahead(intent) > 0
+            else now - self._last_publish >= self.publish_interval
+        )
+        if due:
+            # The factor's samples are taken at the ends of bursts only: a window from a
+            # burst's first tick (the loop just woke, least ahead) to a burst's end (most
+            # ahead) would read fast by up to a display interval over the window (1.006 where
+            # the loop kept 1.000 on average).
+            self._rates.add(now, self.clock, self._busy)
             self._publish(intent)
             self._pace(intent)
 
