@@ -20,6 +20,9 @@ CAMERA_VIEWS: dict[str, tuple[tuple[float, float, float], tuple[float, float, fl
     "front": ((1.0, 0.0, 0.15), (0.0, 0.0, 1.0), 35.0),
 }
 VIEW_MARGIN = 0.9  # [m] around the outer robots (labels, footholds ahead and behind)
+LABEL_HEIGHT = 2.05  # [m] the lowest label's point, over the head (the robot is ~1.9 m tall)
+LABEL_STAGGER = 0.3  # [m] between the labels' heights
+LABEL_SIDE_Y = 0.55  # [m] from a robot's line to its label's point, seen from above
 
 
 def camera_pose(
@@ -30,7 +33,7 @@ def camera_pose(
     direction, up, fov_deg = CAMERA_VIEWS[name]
     d = np.asarray(direction, float) / np.linalg.norm(direction)
     spread = (max(n, 1) - 1) / 2 * ROBOT_SPACING + VIEW_MARGIN
-    top = 2.3 + 0.3 * max(n - 1, 0)  # the highest label
+    top = LABEL_HEIGHT + 0.25 + LABEL_STAGGER * max(n - 1, 0)  # the highest label
     lo = np.array([-spread if along_x else -VIEW_MARGIN, -VIEW_MARGIN if along_x else -spread, 0])
     hi = np.array([spread if along_x else 1.2, VIEW_MARGIN if along_x else spread, top])
     centre = (lo + hi) / 2
@@ -55,3 +58,18 @@ def slot_offset(slot: int, n: int) -> float:
     """[m] offset of robot ``slot`` among ``n``, centred on 0 (along y; along x, seen from
     the side, so that no robot hides another)."""
     return ((n - 1) / 2.0 - slot) * ROBOT_SPACING
+
+
+def label_point(x: float, offset: tuple[float, float], slot: int, n: int, from_above: bool):
+    """(3,) [m] where robot ``slot``'s label (anchored at its text's bottom centre) is put.
+
+    Over the head at staggered heights, so labels never overlap whatever the camera; seen from
+    above a label there hides its robot, so it is put beside the head, on the +y side (up the
+    screen in the top view), between the rows of robots (ROBOT_SPACING apart); at the head's
+    height the perspective moves it with the head.
+    ``x`` is the robot's forward position, ``offset`` its (x, y) offset in the scene.
+    """
+    if from_above:
+        return np.array([x + offset[0], offset[1] + LABEL_SIDE_Y, 1.9], np.float32)
+    z = LABEL_HEIGHT + LABEL_STAGGER * (n - 1 - slot)
+    return np.array([x + offset[0], offset[1], z], np.float32)

@@ -37,7 +37,7 @@ import viser
 
 from app.live import LiveFrame, RobotFrame
 from app.live.history import FrameStore
-from app.web.camera import CAMERA_VIEWS, camera_pose, slot_offset
+from app.web.camera import CAMERA_VIEWS, camera_pose, label_point, slot_offset
 from app.web.overlays import (
     EMPTY_SEG,
     FLOOR_Z,
@@ -145,6 +145,8 @@ class SceneView:
         self._overlay_time = self._label_time = -math.inf
         self._keys: dict[str, Any] = {}
         self.along_x = False  # robots side by side along y (along x: seen from the side)
+        self.from_above = False  # the top view: labels beside the robots, not over them
+        self.version = 0  # changes when the layout changes: the shown frame is drawn again
         if isinstance(target, viser.ViserServer):
             pos, look, _up, fov = camera_pose("follow", 3, 1.3, False)
             target.initial_camera.position = tuple(pos)
@@ -171,6 +173,8 @@ class SceneView:
         # Seen from the side the robots stand one behind the other: spread them along x
         # then (for everyone looking at this scene), along y otherwise.
         self.along_x = name == "side"
+        self.from_above = name == "top"
+        self.version += 1  # re-laid out at the next draw, paused or not
         try:
             aspect = client.camera.aspect
         except AssertionError:  # the browser has not reported its canvas yet
@@ -202,7 +206,7 @@ class SceneView:
                     f"/world/label_{i}",
                     METHOD_INFO[m].title,
                     font_screen_scale=1.1,
-                    anchor="bottom-center",
+                    anchor="bottom-center",  # the text above its point (from above: +y)
                     visible=self.layers["labels"],
                 )
             )
@@ -244,11 +248,9 @@ class SceneView:
             if labels and self.layers["labels"]:
                 self._label_time = now
                 for r, yi, label in zip(robots, y, self.labels, strict=True):
-                    # staggered heights: labels never overlap, whatever the camera
-                    z = 2.05 + 0.3 * (len(robots) - 1 - r.slot)
                     label.set(
                         text=_label_text(r),
-                        position=np.array([r.com[0] + yi[0], yi[1], z], np.float32),
+                        position=label_point(r.com[0], yi, r.slot, n, self.from_above),
                     )
 
     def _draw_overlays(

@@ -69,6 +69,7 @@ class View:
             session.intent.version,
             id(session),
             len(self.registry.pool.deaths) if self.registry.pool else 0,
+            self.scene.version,  # a new camera view lays the robots and labels out anew
         )
         if key == self._drawn:
             return
