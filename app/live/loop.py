@@ -249,9 +249,9 @@ class LiveLoop:
             self.steps_done = intent.step_requests  # resuming drops pending single steps
         for push in intent.pushes:
             if push.number > self.pushes_done:
-                robot = self.robots.get(push.method)
-                if robot is not None and not robot.fell:
-                    robot.session.push(np.asarray(push.force), push.duration)
+                pushed = self.robots.get(push.method)
+                if pushed is not None and not pushed.fell:
+                    pushed.session.push(np.asarray(push.force), push.duration)
                 self.pushes_done = push.number
         self.applied = intent
         self._dirty = True

@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from pathlib import Path
 
 import mujoco
 import numpy as np
@@ -57,7 +58,9 @@ class Contacts:
 class World:
     """A MuJoCo simulation of one robot driven by position targets at ``control_dt``."""
 
-    def __init__(self, sim_dt: float = 0.001, control_dt: float = 0.005, xml: str = SCENE_XML):
+    def __init__(
+        self, sim_dt: float = 0.001, control_dt: float = 0.005, xml: str | Path = SCENE_XML
+    ):
         self.model = mujoco.MjModel.from_xml_path(str(xml))
         self.model.opt.timestep = sim_dt
         self.data = mujoco.MjData(self.model)
