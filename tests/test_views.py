@@ -63,10 +63,11 @@ def _pixels(name: str, n: int, aspect: float, height_px: float):
 
 @pytest.mark.parametrize("n", [1, 2, 3])
 @pytest.mark.parametrize("aspect", [1.0, 1.5, 1.8])
-def test_seen_from_above_a_label_hides_no_robot(n, aspect):
-    """In the top view a label (three lines of text above its point, about 60 x 210 px in a
-    700-px-high canvas) covers neither its robot nor another, with room to spare."""
-    height_px, text_h, text_w = 700.0, 60.0, 210.0
+@pytest.mark.parametrize("height_px", [500.0, 800.0])
+def test_seen_from_above_a_label_hides_no_robot(n, aspect, height_px):
+    """In the top view a label (three lines of text above its point, about 60 x 210 px)
+    covers neither its robot nor another and lies inside the canvas."""
+    text_h, text_w = 60.0, 210.0
     px = _pixels("top", n, aspect, height_px)
     boxes = []  # each robot's outline on the screen (|y| <= 0.325 m standing, arms included)
     for i in range(n):
@@ -78,6 +79,8 @@ def test_seen_from_above_a_label_hides_no_robot(n, aspect):
     for i in range(n):
         a = px(label_point(0.0, (0.0, slot_offset(i, n)), i, n, from_above=True))
         lo, hi = a - (text_w / 2, 0.0), a + (text_w / 2, text_h)  # text above its point
+        half = np.array([height_px * aspect, height_px]) / 2
+        assert np.all(np.abs(lo) <= half) and np.all(np.abs(hi) <= half), (n, aspect, i)
         for b_lo, b_hi in boxes:
             overlap = np.all(lo < b_hi) and np.all(b_lo < hi)
             assert not overlap, (n, aspect, i)

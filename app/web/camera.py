@@ -23,6 +23,7 @@ VIEW_MARGIN = 0.9  # [m] around the outer robots (labels, footholds ahead and be
 LABEL_HEIGHT = 2.05  # [m] the lowest label's point, over the head (the robot is ~1.9 m tall)
 LABEL_STAGGER = 0.3  # [m] between the labels' heights
 LABEL_SIDE_Y = 0.55  # [m] from a robot's line to its label's point, seen from above
+LABEL_TEXT_Y = 0.7  # [m] room the label's text takes up the screen in the top view (~60 px)
 
 
 def camera_pose(
@@ -36,6 +37,8 @@ def camera_pose(
     top = LABEL_HEIGHT + 0.25 + LABEL_STAGGER * max(n - 1, 0)  # the highest label
     lo = np.array([-spread if along_x else -VIEW_MARGIN, -VIEW_MARGIN if along_x else -spread, 0])
     hi = np.array([spread if along_x else 1.2, VIEW_MARGIN if along_x else spread, top])
+    if name == "top":  # the outer label lies beside its robot, up the screen (label_point)
+        hi[1] = max(hi[1], lo[1] + 2 * spread - VIEW_MARGIN + LABEL_SIDE_Y + LABEL_TEXT_Y)
     centre = (lo + hi) / 2
     corners = (
         np.array(
