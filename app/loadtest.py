@@ -3,12 +3,19 @@
 It starts ``pelvic-walk serve`` on free loopback ports (or uses a server already running on
 127.0.0.1 with ``--port`` and ``--viser-port``), sets the number of robots, connects
 ``--viewers`` websocket clients to the viser scene (each offers the subprotocol
-``viser-v<version>`` and reads every message, as a browser tab would), and every second reads
-``GET /api/state`` and the bytes each viewer received. It stops by itself after
-``--seconds`` and prints (and with ``--json`` writes) the real-time factor (median, minimum,
-samples), bytes per viewer per second, and the server's memory (when it started the server):
-once the warm-up is over (the first fifth of the run: the kept history fills up and every
-viewer has its scene) and at the end. Traffic goes to 127.0.0.1 only.
+``viser-v<version>``, reports a camera and reads every message, as a browser tab would), and
+every second reads ``GET /api/sessions`` and the bytes each viewer received. It stops by
+itself after ``--seconds`` and prints (and with ``--json`` writes) the real-time factor
+(median, minimum, samples), bytes per viewer per second, and the server's memory (when it
+started the server): once the warm-up is over (the first fifth of the run: the kept history
+fills up and every viewer has its scene) and at the end. Traffic goes to 127.0.0.1 only.
+
+The factor sampled is the lowest of the running sessions' (one session in shared mode, what
+`GET /api/state` reports). Against a server with ``--sessions private`` every viewer, like a
+browser, opens a private session while the workers have room and watches the shared demo
+after that: the report says how many sessions ran at most and how many viewers were refused.
+(viser counts a client as connected, and the server builds its view, once it has reported its
+camera: in private mode a client that only read got nothing at all, 0.0 KB/s.)
 
 When it started the server it also reads, once a second, the CPU [cores] of the serving
 process and of each worker process (Linux ``/proc``) and the machine's idle cores, and
@@ -155,12 +162,32 @@ def _children(pid: int) -> list[int]:
     return out + [g for c in out for g in _children(c)]
 
 
+def _camera_message() -> bytes:
+    """What a browser sends first: its camera (here a 1280 x 720 canvas looking at the robots)."""
+    import msgspec
+    from viser import _messages  # the wire format of the viser version installed
+
+    msg = _messages.ViewerCameraMessage(
+        wxyz=(1.0, 0.0, 0.0, 0.0),
+        position=(3.0, -3.0, 2.0),
+        fov=0.87,
+        near=0.01,
+        far=1000.0,
+        image_height=720,
+        image_width=1280,
+        look_at=(0.0, 0.0, 1.0),
+        up_direction=(0.0, 0.0, 1.0),
+    )
+    return msgspec.msgpack.encode(msg.as_serializable_dict())
+
+
 async def _viewer(url: str, subprotocol: str, counter: list[int], stop: asyncio.Event) -> None:
     import websockets
 
     async with websockets.connect(
         url, subprotocols=[subprotocol], max_size=None, open_timeout=60
     ) as ws:
+        await ws.send(_camera_message())
         while not stop.is_set():
             try:
                 msg = await asyncio.wait_for(ws.recv(), timeout=0.5)
@@ -186,6 +213,7 @@ async def _run(
     rtf: list[float] = []
     cpu_samples: list[dict[str, Any] | None] = []  # read with each factor sample
     rates: list[float] = []
+    private_max = 0  # private sessions running at once, at most
     async with httpx.AsyncClient(timeout=10) as client:
         await asyncio.sleep(WARMUP_S)
         t0, b0 = time.monotonic(), sum(c[0] for c in counters)
@@ -201,9 +229,15 @@ async def _run(
             for task in tasks:
                 if task.done() and task.exception() is not None:
                     raise RuntimeError(f"a viewer failed: {task.exception()!r}")
-            state = (await client.get(f"{base}/api/state")).json()
-            if state.get("realtime_factor") is not None:
-                rtf.append(float(state["realtime_factor"]))
+            sessions = (await client.get(f"{base}/api/sessions")).json()
+            private_max = max(private_max, int(sessions.get("private_sessions", 0)))
+            factors = [
+                float(s["realtime_factor"])
+                for s in sessions["sessions"]
+                if s["realtime_factor"] is not None and not s["paused"]
+            ]
+            if factors:
+                rtf.append(min(factors))  # the session that keeps real time least
                 cpu_samples.append(used)
             now, b = time.monotonic(), sum(c[0] for c in counters)
             rates.append((b - last_b) / (now - last_t) / max(viewers, 1))
@@ -224,6 +258,7 @@ async def _run(
         "memory_mb_peak": mem_peak,
         "cpu_samples": cpu_samples,
         "cpu": cpu_summary(cpu_samples, rtf),
+        "private_sessions_max": private_max,
     }
 
 
@@ -355,6 +390,13 @@ def format_report(r: dict[str, Any]) -> str:
         f"sent per viewer    {r['bytes_per_viewer_per_s'] / 1e3:.1f} KB/s (max "
         f"{(r['bytes_per_viewer_per_s_max'] or 0) / 1e3:.1f} KB/s over 1 s)",
     ]
+    health = r.get("health") or {}
+    if health.get("sessions_mode") == "private":
+        lines.append(
+            f"private sessions   {r['private_sessions_max']} at most at once, "
+            f"{health.get('viewers_refused', 0)} viewers told the workers were full "
+            "(they watch the shared demo); the factor is the lowest session's"
+        )
     if r.get("memory_growth_percent") is not None:
         lines.append(
             f"server memory      {r['memory_mb_start']:.0f} MB at start, "

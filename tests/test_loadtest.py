@@ -34,6 +34,24 @@ def test_a_short_load_reports_real_time_bytes_and_memory():
     assert "CPU [cores]        serving process" in text and "child processes" in text
 
 
+def test_in_private_mode_each_viewer_opens_a_session_or_is_told_they_are_full():
+    """The viewers report a camera as browsers do, so a private-mode server gives each its own
+    session while the worker has room (3 robots: the shared demo's 1 and one private pair)
+    and tells the rest; every viewer gets a scene either way."""
+    r = run_loadtest(
+        viewers=3,
+        robots=1,
+        seconds=5,
+        serve_args=["--sessions", "private", "--workers", "1", "--robots-per-worker", "3"],
+    )
+    refused = r["health"]["viewers_refused"]
+    assert r["private_sessions_max"] >= 1 and refused >= 1
+    assert r["private_sessions_max"] + refused == 3
+    assert r["bytes_per_viewer_per_s"] > 1000
+    assert len(r["realtime_factor_samples"]) >= 1
+    assert f"{refused} viewers told the workers were full" in format_report(r)
+
+
 def _cpu(server, workers, idle):
     return {"server": server, "workers": workers, "idle": idle}
 
