@@ -93,21 +93,28 @@ def test_pacing_sleeps_to_the_wall_clock():
         sim.stop()
 
 
+def _costly_loop(wall, cost: float, publish, publish_hz: float, sleep=None) -> LiveLoop:
+    """One fixed robot in a loop on the fake ``wall`` clock, each iteration costing ``cost``
+    seconds of wall time, the time base anchored at wall time 0."""
+    intent = dataclasses.replace(initial_intent(short_params(3), ["fixed"]), anchor=(0.0, 0.0))
+
+    def intents():
+        with wall.lock:
+            wall.now += cost
+        return intent
+
+    return LiveLoop(
+        intents, publish, clock=wall.clock, sleep=sleep or wall.sleep, publish_hz=publish_hz
+    )
+
+
 def test_the_loop_wakes_once_per_frame_and_leads_by_less_than_one():
     """The ticks between two frames run back to back and the loop then sleeps off its lead on
     the time base: with a tick costing 2 ms of a 5-ms period it sleeps about once per frame
     (not once per tick), keeps real time, and leads the time base by less than a display
     interval plus a tick (what a frame can show ahead of the wall clock)."""
     wall = FakeWallClock()
-    cost = 0.002  # [s] of wall time each iteration takes
-
-    intent = dataclasses.replace(initial_intent(short_params(3), ["fixed"]), anchor=(0.0, 0.0))
     frames, sleeps, leads = [], [], []
-
-    def intents():
-        with wall.lock:
-            wall.now += cost
-        return intent
 
     def sleep(seconds: float) -> None:
         sleeps.append(seconds)
@@ -117,7 +124,7 @@ def test_the_loop_wakes_once_per_frame_and_leads_by_less_than_one():
         frames.append(frame)
         leads.append(frame.clock - wall.clock())
 
-    loop = LiveLoop(intents, publish, clock=wall.clock, sleep=sleep, publish_hz=30.0)
+    loop = _costly_loop(wall, 0.002, publish, 30.0, sleep)
     while loop.clock < 3.0:
         loop.iterate()
     ticks = round(loop.clock / DT)
@@ -134,19 +141,13 @@ def test_a_loop_that_keeps_real_time_reads_a_factor_of_one(publish_hz, cost):
     tick to a burst's end read 1.006-1.008 in 20-viewer runs that kept 1.000). What is left
     is the jitter of a frame's lead (whole ticks in a burst) over the window."""
     wall = FakeWallClock()
-    intent = dataclasses.replace(initial_intent(short_params(3), ["fixed"]), anchor=(0.0, 0.0))
     factors: list[tuple[float, float]] = []
-
-    def intents():
-        with wall.lock:
-            wall.now += cost  # [s] of wall time each tick takes
-        return intent
 
     def publish(frame) -> None:
         if frame.realtime_factor is not None:
             factors.append((wall.clock(), frame.realtime_factor))
 
-    loop = LiveLoop(intents, publish, clock=wall.clock, sleep=wall.sleep, publish_hz=publish_hz)
+    loop = _costly_loop(wall, cost, publish, publish_hz)
     while loop.clock < 8.0:
         loop.iterate()
     steady = np.array([f for t, f in factors if t > RTF_WINDOW_S + 1.0])

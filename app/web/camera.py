@@ -63,7 +63,9 @@ def slot_offset(slot: int, n: int) -> float:
     return ((n - 1) / 2.0 - slot) * ROBOT_SPACING
 
 
-def label_point(x: float, offset: tuple[float, float], slot: int, n: int, from_above: bool):
+def label_point(
+    x: float, offset: tuple[float, float], slot: int, n: int, from_above: bool
+) -> np.ndarray:
     """(3,) [m] where robot ``slot``'s label (anchored at its text's bottom centre) is put.
 
     Over the head at staggered heights, so labels never overlap whatever the camera; seen from

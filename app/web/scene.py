@@ -144,8 +144,7 @@ class SceneView:
         self._methods: tuple[str, ...] = ()
         self._overlay_time = self._label_time = -math.inf
         self._keys: dict[str, Any] = {}
-        self.along_x = False  # robots side by side along y (along x: seen from the side)
-        self.from_above = False  # the top view: labels beside the robots, not over them
+        self.camera_view = "follow"  # the last view asked for: how robots and labels lie
         self.version = 0  # changes when the layout changes: the shown frame is drawn again
         if isinstance(target, viser.ViserServer):
             pos, look, _up, fov = camera_pose("follow", 3, 1.3, False)
@@ -171,9 +170,9 @@ class SceneView:
         if client is None or name not in CAMERA_VIEWS:
             return
         # Seen from the side the robots stand one behind the other: spread them along x
-        # then (for everyone looking at this scene), along y otherwise.
-        self.along_x = name == "side"
-        self.from_above = name == "top"
+        # then (for everyone looking at this scene), along y otherwise; seen from above, the
+        # labels lie beside the robots.
+        self.camera_view = name
         self.version += 1  # re-laid out at the next draw, paused or not
         try:
             aspect = client.camera.aspect
@@ -186,6 +185,16 @@ class SceneView:
             client.camera.fov = fov
             client.camera.position = tuple(pos)
             client.camera.look_at = tuple(look)
+
+    @property
+    def along_x(self) -> bool:
+        """Robots side by side along x (seen from the side), else along y."""
+        return self.camera_view == "side"
+
+    @property
+    def from_above(self) -> bool:
+        """The top view: labels beside the robots, not over them."""
+        return self.camera_view == "top"
 
     def _apply_layers(self) -> None:
         self.robots.set_visible(self.layers["robots"])
