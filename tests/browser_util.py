@@ -115,18 +115,38 @@ def slider(frame, label: str):
     return root.locator('[role="slider"]'), root.locator(".mantine-Slider-track")
 
 
-def click_slider(page, frame, label: str, value: float) -> None:
-    """Click a slider's track where ``value`` lies (keyboard arrows would move the camera)."""
+def click_slider(page, frame, label: str, value: float, timeout: float = 90.0) -> float:
+    """Click a slider's track where ``value`` lies (keyboard arrows would move the camera) and
+    return the value the slider then shows. No actionability waits: Playwright's "stable" check
+    needs two animation frames alike, which a software-rendered scene on a busy 2-core machine
+    can hold off past any timeout (seen in CI); the track is scrolled into view by script and
+    clicked once its box has stopped moving."""
     thumb, track = slider(frame, label)
-    track.scroll_into_view_if_needed()
-    box = track.bounding_box()
+    track.evaluate("e => e.scrollIntoView({block: 'center'})", timeout=timeout * 1000)
+    boxes: list = []
+
+    def settled():
+        boxes.append(track.bounding_box(timeout=timeout * 1000))
+        return len(boxes) > 1 and boxes[-1] is not None and boxes[-1] == boxes[-2]
+
+    assert wait_for(settled, timeout=timeout, every=0.2), f"{label!r}: its track kept moving"
+    box = boxes[-1]
     lo, hi = (
-        float(thumb.get_attribute("aria-valuemin")),
-        float(thumb.get_attribute("aria-valuemax")),
+        float(thumb.get_attribute("aria-valuemin", timeout=timeout * 1000)),
+        float(thumb.get_attribute("aria-valuemax", timeout=timeout * 1000)),
     )
+    before = thumb.get_attribute("aria-valuenow")
     page.mouse.click(
         box["x"] + (value - lo) / (hi - lo) * box["width"], box["y"] + box["height"] / 2
     )
+    # the page re-renders the thumb when it gets to it; a click on the value shown changes nothing
+    wait_for(
+        lambda: thumb.get_attribute("aria-valuenow") != before
+        or abs(float(before) - value) < 1e-9,
+        timeout=timeout,
+        every=0.2,
+    )
+    return float(thumb.get_attribute("aria-valuenow"))
 
 
 def press(locator, timeout: float = 90_000) -> None:
