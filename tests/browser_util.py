@@ -141,8 +141,7 @@ def click_slider(page, frame, label: str, value: float, timeout: float = 90.0) -
     )
     # the page re-renders the thumb when it gets to it; a click on the value shown changes nothing
     wait_for(
-        lambda: thumb.get_attribute("aria-valuenow") != before
-        or abs(float(before) - value) < 1e-9,
+        lambda: thumb.get_attribute("aria-valuenow") != before or abs(float(before) - value) < 1e-9,
         timeout=timeout,
         every=0.2,
     )
