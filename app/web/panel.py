@@ -75,8 +75,8 @@ class ControlPanel:
         self.method_boxes: dict[str, Any] = {}
         self._message: str | None = None  # a one-off message in the status area
         self._status_time = -math.inf
+        gui.main_panel.dock_right()  # docked, not floating over the scene (viser's default)
         gui.configure_theme(
-            control_layout="fixed",  # viser 1.1 warns it is deprecated; its default floats
             control_width="large",
             dark_mode=False,
             show_logo=False,
