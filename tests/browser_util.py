@@ -115,14 +115,21 @@ def slider(frame, label: str):
     return root.locator('[role="slider"]'), root.locator(".mantine-Slider-track")
 
 
+def scroll_into_view(locator, timeout: float = 90.0) -> None:
+    """Scroll an element to the middle of its scroll area by script: Playwright's
+    ``scroll_into_view_if_needed`` first waits for the element to be "stable" (two animation
+    frames alike), which a software-rendered scene on a busy 2-core machine can hold off past
+    any timeout (seen in CI)."""
+    locator.first.evaluate("e => e.scrollIntoView({block: 'center'})", timeout=timeout * 1000)
+
+
 def click_slider(page, frame, label: str, value: float, timeout: float = 90.0) -> float:
     """Click a slider's track where ``value`` lies (keyboard arrows would move the camera) and
     return the value the slider then shows. No actionability waits: Playwright's "stable" check
-    needs two animation frames alike, which a software-rendered scene on a busy 2-core machine
-    can hold off past any timeout (seen in CI); the track is scrolled into view by script and
-    clicked once its box has stopped moving."""
+    needs two animation frames alike, which a busy machine can hold off past any timeout (see
+    :func:`scroll_into_view`); the track is clicked once its box has stopped moving."""
     thumb, track = slider(frame, label)
-    track.evaluate("e => e.scrollIntoView({block: 'center'})", timeout=timeout * 1000)
+    scroll_into_view(track, timeout)
     boxes: list = []
 
     def settled():

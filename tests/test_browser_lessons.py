@@ -26,6 +26,7 @@ from browser_util import (
     close_notice,
     free_port,
     press,
+    scroll_into_view,
     wait_for,
 )
 
@@ -118,7 +119,7 @@ def test_each_lesson_sets_params_view_and_shows_live_numbers():
                 for _attempt in range(3):
                     reported.clear()
                     button = scene.get_by_role("button", name=lesson.title).first
-                    button.scroll_into_view_if_needed(timeout=30_000)
+                    scroll_into_view(button)
                     press(button)
                     params = wait_for(
                         lambda lesson=lesson: (

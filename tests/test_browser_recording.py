@@ -82,7 +82,12 @@ def test_recording_plays_from_the_files_alone(recorded):
             shots = []
             for i, t in enumerate(("2", "7")):
                 clock.fill(t)
-                assert float(bar.get_attribute("aria-valuenow")) == pytest.approx(float(t))
+                assert wait_for(
+                    lambda t=t: (
+                        float(bar.get_attribute("aria-valuenow")) == pytest.approx(float(t))
+                    ),
+                    30,
+                ), f"the time bar did not move to {t} s"
                 shots.append(_canvas_shot(page, scene, ARTIFACTS / f"recording_{i + 1}.png"))
             page.screenshot(path=str(ARTIFACTS / "recording_page.png"), full_page=True)
         finally:
