@@ -40,7 +40,7 @@ chromium:
 test: $(TEST_STAMP) chromium
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
-# Style and types: ruff's rules and formatting everywhere, mypy on the pure controller.
+# Style and types: ruff's rules and formatting everywhere, mypy on app and controller.
 lint: $(TEST_STAMP)
 	$(BIN)/ruff check app controller models tests
 	$(BIN)/ruff format --check app controller models tests

@@ -40,9 +40,12 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, cast
 
 import httpx
+
+if TYPE_CHECKING:
+    from websockets.typing import Subprotocol
 
 METHOD_SETS = {1: ["mpc"], 2: ["fixed", "mpc"], 3: ["fixed", "redundancy", "mpc"]}
 WARMUP_S = 5.0  # [s] after the viewers connect, before sampling
@@ -149,7 +152,11 @@ def cpu_summary(
             if j < len(samples) and samples[j] is not None
         }
     )
-    return {"run": mean(rows), "below": mean([samples[j] for j in dips]), "level": level}
+    return {
+        "run": mean(rows),
+        "below": mean([cast(dict[str, Any], samples[j]) for j in dips]),  # dips skip the Nones
+        "level": level,
+    }
 
 
 def _children(pid: int) -> list[int]:
@@ -185,7 +192,7 @@ async def _viewer(url: str, subprotocol: str, counter: list[int], stop: asyncio.
     import websockets
 
     async with websockets.connect(
-        url, subprotocols=[subprotocol], max_size=None, open_timeout=60
+        url, subprotocols=[cast("Subprotocol", subprotocol)], max_size=None, open_timeout=60
     ) as ws:
         await ws.send(_camera_message())
         while not stop.is_set():

@@ -1,4 +1,4 @@
-"""`make lint` as a test, so CI checks it too: ruff's rules and formatting, mypy on controller/."""
+"""`make lint` as a test, so CI checks it too: ruff (rules, formatting), mypy (app, controller)."""
 
 from __future__ import annotations
 
@@ -22,6 +22,6 @@ def test_ruff_rules_and_formatting():
     assert fmt.returncode == 0, fmt.stdout[-3000:]
 
 
-def test_mypy_on_the_controller_is_clean():
+def test_mypy_is_clean():
     result = _run(str(BIN / "mypy"))
     assert result.returncode == 0, result.stdout[-3000:]

@@ -15,8 +15,11 @@ mark "(n.s.)" where two means differ by less than twice the standard error of th
 
 from __future__ import annotations
 
+from typing import cast
+
 from app.experiments import measures, paper
 from app.experiments.definitions import Study
+from app.experiments.paper import MeanStd
 from app.experiments.results import ClaimResult, StudyResults
 from app.experiments.verdicts import Claim, Rule, above, at_least, at_most, below, is_
 from controller.params import ControllerParams
@@ -42,13 +45,21 @@ def _t1(lo: float, hi: float) -> list[float]:
 
 
 def _t1_vs_fixed(lo: float, hi: float) -> str:
-    means = {x: [_T[m][x].mean for m in ("redundancy", "mpc", "fixed")] for x in _t1(lo, hi)}
+    # Table 1 has all three up to the fixed pelvis's limit
+    means = {
+        x: [cast(MeanStd, _T[m][x]).mean for m in ("redundancy", "mpc", "fixed")]
+        for x in _t1(lo, hi)
+    }
     return "; ".join(f"{x:.2f}: {r:.1f} / {m:.1f} vs {f:.1f} J" for x, (r, m, f) in means.items())
 
 
 _T1_BOTH = [x for x in paper.TABLE1_LENGTHS if _T["mpc"][x] and _T["redundancy"][x]]
-_T1_STD_WINS = sum(_T["mpc"][x].std < _T["redundancy"][x].std for x in _T1_BOTH)
-_T1_GAPS = [_T["redundancy"][x].std - _T["mpc"][x].std for x in _T1_BOTH]
+_T1_STD_WINS = sum(
+    cast(MeanStd, _T["mpc"][x]).std < cast(MeanStd, _T["redundancy"][x]).std for x in _T1_BOTH
+)
+_T1_GAPS = [
+    cast(MeanStd, _T["redundancy"][x]).std - cast(MeanStd, _T["mpc"][x]).std for x in _T1_BOTH
+]
 _SHARE = "share of the comparisons that agree"
 
 
@@ -59,12 +70,14 @@ def _count(wins: int, n: int) -> str:
 # "the least energy except at a specific step length" on the paper's own Table 1
 _LEAST = [x for x in paper.TABLE1_LENGTHS if sum(_T[m][x] is not None for m in paper.TABLE1) >= 2]
 _LEAST_WINS = sum(
-    min((m for m in paper.TABLE1 if _T[m][x]), key=lambda m: _T[m][x].mean) == "mpc" for x in _LEAST
+    min((m for m in paper.TABLE1 if _T[m][x]), key=lambda m: cast(MeanStd, _T[m][x]).mean) == "mpc"
+    for x in _LEAST
 )
 _LEAST_MISSES = ", ".join(
     f"{x:.2f} m"
     for x in _LEAST
-    if min((m for m in paper.TABLE1 if _T[m][x]), key=lambda m: _T[m][x].mean) != "mpc"
+    if min((m for m in paper.TABLE1 if _T[m][x]), key=lambda m: cast(MeanStd, _T[m][x]).mean)
+    != "mpc"
 )
 ZMP_MARGIN_HOLDS_MM = 10.0
 ZMP_MARGIN_PARTLY_MM = 2.0
@@ -224,7 +237,8 @@ CLAIMS: tuple[Claim, ...] = (
         + " and ".join(f"{x:.2f}" for x in paper.ENERGY_MPC_BELOW_REDUNDANCY)
         + " m",
         paper="; ".join(
-            f"{_T['mpc'][x].mean:.1f} vs {_T['redundancy'][x].mean:.1f} J"
+            f"{cast(MeanStd, _T['mpc'][x]).mean:.1f} vs "
+            f"{cast(MeanStd, _T['redundancy'][x]).mean:.1f} J"
             for x in paper.ENERGY_MPC_BELOW_REDUNDANCY
         ),
         measure=measures.energy_mean_long,

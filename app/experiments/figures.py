@@ -10,7 +10,7 @@ empty. Method labels and colours are ``controller.params``'s, the paper's number
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 
 import matplotlib
 
@@ -261,8 +261,8 @@ def fig_energy(study: Study, results: Results, r: StudyResults, path: Path) -> s
     off = {m: 0.004 * (i - (len(study.methods) - 1) / 2) for i, m in enumerate(study.methods)}
     drawn = False
     for m in study.methods:
-        cells = [(x, e.cell(m, x)) for x in e.lengths]
-        cells = [(x + off[m], c) for x, c in cells if c]
+        found = [(x, e.cell(m, x)) for x in e.lengths]
+        cells = [(x + off[m], c) for x, c in found if c]
         if cells:
             drawn = True
             xs = [x for x, _ in cells]
@@ -292,8 +292,8 @@ def fig_energy(study: Study, results: Results, r: StudyResults, path: Path) -> s
         px = paper.table1_lengths(m)
         ax_p.errorbar(
             [x + off[m] for x in px],
-            [paper.TABLE1[m][x].mean for x in px],
-            yerr=[paper.TABLE1[m][x].std for x in px],
+            [cast(paper.MeanStd, paper.TABLE1[m][x]).mean for x in px],  # px: no dashes
+            yerr=[cast(paper.MeanStd, paper.TABLE1[m][x]).std for x in px],
             color=method_hex(m),
             marker="s",
             capsize=3,
@@ -459,6 +459,8 @@ def fig_zmp(study: Study, results: Results, r: StudyResults, path: Path) -> str 
     title = "middle of the walk, to scale"
     z = r.zmp
     if z.available:
+        assert z.cop_in_measured_support_walking is not None  # set when available
+        assert z.lipm_in_planned_support_walking is not None
         title += (
             f"\nwalking ticks with the CoP inside the measured support polygon: "
             f"{z.cop_in_measured_support_walking * 100:.1f} %; LIPM ZMP inside the "

@@ -9,7 +9,7 @@ claim; NaN or None in a number fails any bound on it.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -123,8 +123,8 @@ def arm_swing(study: Study, r: StudyResults) -> Measured:
     ]
     if not ok:
         return None
-    best = max(ok, key=lambda c: c.peak_reduction_percent)
-    worst = min(ok, key=lambda c: c.peak_reduction_percent)
+    best = max(ok, key=lambda c: cast(float, c.peak_reduction_percent))  # not None in ok
+    worst = min(ok, key=lambda c: cast(float, c.peak_reduction_percent))
     return dict(
         best=best.peak_reduction_percent,
         best_case=f"{best.method}, {best.step_length} m",
@@ -164,12 +164,14 @@ def energy_std(study: Study, r: StudyResults) -> Measured:
     if not pairs:
         return None
     details = ", ".join(f"{x:.2f}: {a.std:.1f} vs {b.std:.1f} J" for x, a, b in pairs)
-    return _wins(sum(a.std < b.std for _, a, b in pairs), len(pairs), details)
+    # the cells of EnergySection.cell() have a mean and a std (here and below)
+    wins = sum(cast(float, a.std) < cast(float, b.std) for _, a, b in pairs)
+    return _wins(wins, len(pairs), details)
 
 
 def energy_std_gap(study: Study, r: StudyResults) -> Measured:
     pairs = _mpc_redundancy(r, r.energy.lengths)
-    gaps = [b.std - a.std for _, a, b in pairs]
+    gaps = [cast(float, b.std) - cast(float, a.std) for _, a, b in pairs]
     if len(gaps) < 3:
         return None
     rho = float(np.corrcoef(np.argsort(np.argsort(gaps)), np.arange(len(gaps)))[0, 1])
@@ -183,7 +185,8 @@ def energy_mean_long(study: Study, r: StudyResults) -> Measured:
     if not pairs:
         return None
     details = ", ".join(f"{x:.2f}: {_vs(a, b)}" for x, a, b in pairs)
-    return _wins(sum(a.mean < b.mean for _, a, b in pairs), len(pairs), details)
+    wins = sum(cast(float, a.mean) < cast(float, b.mean) for _, a, b in pairs)
+    return _wins(wins, len(pairs), details)
 
 
 def energy_vs_fixed(
@@ -203,7 +206,9 @@ def energy_vs_fixed(
             return None
         details = "; ".join(f"{x:.2f} {m}: {_vs(c, f)}" for x, m, c, f in checks)
         return _wins(
-            sum((c.mean < f.mean) == cheaper for _, _, c, f in checks), len(checks), details
+            sum((cast(float, c.mean) < cast(float, f.mean)) == cheaper for _, _, c, f in checks),
+            len(checks),
+            details,
         )
 
     return measure
@@ -229,7 +234,7 @@ def energy_least(study: Study, r: StudyResults) -> Measured:
         if "mpc" not in cells or len(cells) < 2:
             continue
         n += 1
-        least = min(cells, key=lambda m: cells[m].mean)
+        least = min(cells, key=lambda m: cast(float, cells[m].mean))
         if least == "mpc":
             wins += 1
         else:
@@ -332,6 +337,7 @@ def zmp(study: Study, r: StudyResults) -> Measured:
     if not z.available or b is None or b.margin_p5_mm is None:
         return None
     cop, lipm = z.cop_in_measured_support_walking, z.lipm_in_planned_support_walking
+    assert cop is not None and lipm is not None  # set when available
     return dict(
         cop=cop,
         lipm=lipm,

@@ -21,6 +21,7 @@ import time
 from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import cast
 
 from tqdm import tqdm
 
@@ -34,7 +35,7 @@ from app.experiments.definitions import (
     planned_runs,
     refinement_runs,
 )
-from app.experiments.results import Meta, Results, RunRecord, StudyResults, to_json
+from app.experiments.results import Meta, Results, RunRecord, RunSummary, StudyResults, to_json
 from app.experiments.results_more import SensitivitySection
 from app.experiments.worker import execute
 
@@ -93,7 +94,7 @@ def estimate_full_seconds(results: Results, jobs: int) -> float | None:
     done = [r for r in results.values() if r.summary and r.summary.sim_time > 0]
     if not done:
         return None
-    rate = sum(r.wall_s for r in done) / sum(r.summary.sim_time for r in done)
+    rate = sum(r.wall_s for r in done) / sum(cast(RunSummary, r.summary).sim_time for r in done)
     overhead = 0.8 + 1.2 * 0.2 + 1.0 + 1.2  # [s] stand, final DSP, final stand, closing step
     sim = sum(s.n_steps * 1.2 + overhead for s in planned_runs(FULL))
     sim += 20 * (FULL.n_steps * 1.2 + overhead)

@@ -20,7 +20,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -129,7 +129,7 @@ def kinematics() -> KinematicsSection:
     from models.dyros_jet import HIP_HEIGHT_Z0, HIP_OFFSET, LEG_LENGTH, W_STEP
 
     theirs = vars(paper.ROBOT)
-    ours = dict(
+    ours: dict[str, Any] = dict(
         l_leg=LEG_LENGTH,
         z0=HIP_HEIGHT_Z0,
         l_pel=2 * HIP_OFFSET[1],
@@ -273,7 +273,7 @@ def waist(study: Study, results: Results) -> WaistSection:
         for m in ROTATING:
             ex = step_of(results, study.figure_run(m, x))
             ok = ex is not None and len(ex.t) >= 3
-            cases[case_key(m, x)] = waist_case(m, x, ex) if ok else None
+            cases[case_key(m, x)] = waist_case(m, x, cast(StepExtract, ex)) if ok else None
     return WaistSection(cases)
 
 
@@ -388,6 +388,8 @@ def significant(a: EnergyCell, b: EnergyCell) -> bool:
     p = welch_p(a.run_means, b.run_means)
     if p is not None:
         return p < SIGNIFICANCE
+    assert a.mean is not None and a.std is not None  # cells of EnergySection.cell()
+    assert b.mean is not None and b.std is not None
     se = math.sqrt(a.std**2 / max(a.n_windows, 1) + b.std**2 / max(b.n_windows, 1))
     return abs(a.mean - b.mean) >= 2 * se
 

@@ -26,6 +26,7 @@ import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import cast
 
 import numpy as np
 
@@ -106,8 +107,8 @@ class RemoteSession(SessionView):
         return not self._closed.is_set() and bool(self.parts)
 
     @property
-    def worker_pids(self) -> list[int | None]:
-        return sorted({w.process.pid for w in self.parts.values()})
+    def worker_pids(self) -> list[int]:
+        return sorted({cast(int, w.process.pid) for w in self.parts.values()})  # started in _spawn
 
     def close(self) -> None:
         self.pool.close(self)

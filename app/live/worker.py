@@ -21,7 +21,7 @@ import signal
 import threading
 import traceback
 from multiprocessing.connection import Connection
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
@@ -43,7 +43,7 @@ class FrameCodec:
         for r in frame.robots:
             key = (sid, r.method)
             if self._plans.get(key) is r.plan:
-                r = dataclasses.replace(r, plan=None)
+                r = dataclasses.replace(r, plan=cast(Any, None))  # decode() restores it
             else:
                 self._plans[key] = r.plan
             robots.append(r)

@@ -256,8 +256,8 @@ class LearnTab:
             return self._liftoff(recent)
         if key == "yaw":
             h = col("yaw_momentum")
-            peak = f"{np.abs(h).max():.2f}" if h.size else "-"
-            return f"{r.yaw_momentum:+.2f} ({peak}) kg m²/s"
+            peak_text = f"{np.abs(h).max():.2f}" if h.size else "-"
+            return f"{r.yaw_momentum:+.2f} ({peak_text}) kg m²/s"
         if key == "arms":
             return "on" if r.params.arms.enabled else "<b>off</b>"
         if key == "settings":

@@ -183,6 +183,7 @@ class ControlPanel:
             handle = gui.add_checkbox(label, bool(value), hint=_hint(meta))
         elif log:
             lo, hi = math.log10(meta["log_min"]), math.log10(meta["max"])
+            marks: list[tuple[float, str]] | tuple[tuple[float, str], ...] | None
             marks = [(round(x), f"1e{round(x)}") for x in (lo, hi)]
             if meta.get("paper"):
                 marks.append((math.log10(meta["paper"]), "paper"))

@@ -140,8 +140,8 @@ def from_session(session: SessionView, seconds: float) -> Recording:
     methods = tuple(r.method for r in frames[-1].robots)
     frames = [f for f in frames if tuple(r.method for r in f.robots) == methods]
     start = frames[0].clock
-    window = session.history.window(end - start, until=end)
-    rows = {m: window.rows[m] for m in methods if m in window.rows}
+    plots = session.history.window(end - start, until=end)
+    rows = {m: plots.rows[m] for m in methods if m in plots.rows}
     return Recording(decimate(frames), rows, "live session")
 
 

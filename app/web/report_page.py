@@ -44,6 +44,7 @@ def _rewrite_urls(state: StateCore) -> None:
             attr = _URL_ATTRS.get(token.type)
             value = token.attrGet(attr) if attr else None
             if isinstance(value, str):
+                assert attr is not None  # value is None without one
                 token.attrSet(attr, report_url(value))
 
 

@@ -336,14 +336,14 @@ class SceneView:
             key = tuple((id(r.plan), r.step_index) for r in robots)
             if self._keys.get("sticks") != key:
                 self._keys["sticks"] = key
-                parts = []
+                sticks = []
                 for r, yi in zip(robots, y, strict=True):
                     seg = stick_segments(kept, r)
                     if seg is not None:
                         seg = seg + (*yi, 0.0)
-                        parts += [(seg[:3], STICK_START), (seg[3:], STICK_END)]
-                pts, cols = colored(parts)
-                ov["sticks"].set(points=pts, colors=cols)
+                        sticks += [(seg[:3], STICK_START), (seg[3:], STICK_END)]
+                stick_pts, stick_cols = colored(sticks)
+                ov["sticks"].set(points=stick_pts, colors=stick_cols)
 
 
 def _label_text(r: RobotFrame) -> str:

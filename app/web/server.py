@@ -31,6 +31,7 @@ import socket
 import sys
 import threading
 from pathlib import Path
+from typing import Any
 
 import viser
 from pydantic import ValidationError
@@ -103,7 +104,7 @@ def serve(
     """
     import uvicorn
 
-    given = {
+    given: dict[str, Any] = {
         "host": host,
         "port": port,
         "viser_port": viser_port,

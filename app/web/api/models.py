@@ -5,7 +5,7 @@ as "horizon >= one MPC sample" come from its ``validated()``)."""
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Any, Literal, cast
 
 from pydantic import BaseModel, ConfigDict, Field, create_model
 
@@ -14,6 +14,8 @@ from controller.params import GROUPS, METHODS, ControllerParams, spec
 
 MethodName = Literal[METHODS]  # type: ignore[valid-type]
 STRICT = ConfigDict(extra="forbid")
+# create_model(**fields): the values of a **dict must also fit its __config__, __base__... keywords
+Fields = dict[str, Any]
 
 
 def _field(meta: dict[str, Any], required: bool) -> tuple[Any, Any]:
@@ -25,7 +27,7 @@ def _field(meta: dict[str, Any], required: bool) -> tuple[Any, Any]:
     if meta.get("applies") == "step":
         desc += " (takes effect from the next step)"
     if meta.get("choices"):
-        typ: Any = Literal[tuple(meta["choices"])]  # type: ignore[valid-type]
+        typ: Any = Literal[tuple(meta["choices"])]
         return (typ if required else typ | None, Field(default, description=desc))
     if meta["type"] == "bool":
         return (bool if required else bool | None, Field(default, strict=True, description=desc))
@@ -53,12 +55,12 @@ def _group_models() -> tuple[dict[str, type[BaseModel]], dict[str, type[BaseMode
         full[group] = create_model(
             f"{cls_name}Model",
             __config__=STRICT,
-            **{k: _field(m, required=True) for k, m in meta.items()},
+            **cast(Fields, {k: _field(m, required=True) for k, m in meta.items()}),
         )
         partial[group] = create_model(
             f"{cls_name}Update",
             __config__=STRICT,
-            **{k: _field(m, required=False) for k, m in meta.items()},
+            **cast(Fields, {k: _field(m, required=False) for k, m in meta.items()}),
         )
     return full, partial
 
@@ -67,16 +69,16 @@ GROUP_MODELS, GROUP_UPDATES = _group_models()
 ParamsModel = create_model(
     "ParamsModel",
     __config__=STRICT,
-    **{g: (GROUP_MODELS[g], ...) for g in GROUPS},
+    **cast(Fields, {g: (GROUP_MODELS[g], ...) for g in GROUPS}),
     methods=(list[MethodName], Field(..., description="robots shown live, one per method")),
     control_dt=(float, Field(..., description="control period [s] (fixed)")),
 )
 ParamsUpdate = create_model(
     "ParamsUpdate",
     __config__=STRICT,
-    **{g: (GROUP_UPDATES[g] | None, None) for g in GROUPS},
+    **cast(Fields, {g: (GROUP_UPDATES[g] | None, None) for g in GROUPS}),
     methods=(
-        list[MethodName] | None,
+        cast(Any, list[MethodName] | None),  # a UnionType is not a type[Any] to mypy
         Field(
             None,
             min_length=1,
@@ -89,8 +91,11 @@ RunRequest = create_model(
     "RunRequest",
     __config__=STRICT,
     method=(MethodName, Field("mpc", description="walking method")),
-    seed=(int | None, Field(None, strict=True, description="seed of a small perturbation")),
-    **{g: (GROUP_UPDATES[g] | None, None) for g in GROUPS},
+    seed=(
+        cast(Any, int | None),
+        Field(None, strict=True, description="seed of a small perturbation"),
+    ),
+    **cast(Fields, {g: (GROUP_UPDATES[g] | None, None) for g in GROUPS}),
 )
 
 
@@ -141,7 +146,7 @@ class SeekRequest(BaseModel):
 
 class PushRequest(BaseModel):
     model_config = STRICT
-    method: MethodName = Field(..., description="the robot to push")  # type: ignore[valid-type]
+    method: MethodName = Field(..., description="the robot to push")
     force: tuple[float, float] = Field(
         ..., description=f"[Fx, Fy] horizontal force on the torso [N], |F| <= {PUSH_FORCE_MAX:.0f}"
     )
