@@ -113,7 +113,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
                 lambda: (s := httpx.get(f"{server}/api/state", timeout=30).json())["paused"] and s
             )
             assert state and state["shown_t"] is None
-            timeline, _t = slider(scene, "Timeline [s] (paused)")
+            timeline, _t = slider(scene, "Timeline [s] (when paused)")
             assert wait_for(lambda: timeline.get_attribute("data-disabled") is None)
 
             def _range_shown():
@@ -128,7 +128,7 @@ def test_page_scene_gui_slider_timeline_and_views(server):
             assert kept, "the timeline never showed the kept span"
             assert kept["end"] - kept["start"] > 10.0
             click_slider(
-                page, scene, "Timeline [s] (paused)", kept["end"] - 10.0
+                page, scene, "Timeline [s] (when paused)", kept["end"] - 10.0
             )  # ten seconds back
             sought = wait_for(
                 lambda: (

@@ -111,8 +111,14 @@ class ControlPanel:
             self.pause_button.on_click(lambda _e: self._toggle_pause())
             row = gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
             row.on_click(lambda e: self._step(e.target.value))
-            self.timeline = gui.add_slider(
-                "Timeline [s] (paused)", 0.0, 1.0, 0.005, 1.0, disabled=True
+            self.timeline = gui.add_slider(  # enabled while paused (see reflect)
+                "Timeline [s] (when paused)",
+                0.0,
+                1.0,
+                0.005,
+                1.0,
+                disabled=True,
+                hint="Pause, then drag to replay the recent walk (the span under the slider)",
             )
             self.timeline.on_update(lambda _e: self._seek())
             self.speed = gui.add_slider(
