@@ -123,9 +123,9 @@ def scroll_into_view(locator, timeout: float = 90.0) -> None:
     locator.first.evaluate("e => e.scrollIntoView({block: 'center'})", timeout=timeout * 1000)
 
 
-def click_slider(page, frame, label: str, value: float, timeout: float = 90.0) -> float:
+def click_slider(page, frame, label: str, value: float, timeout: float = 90.0) -> None:
     """Click a slider's track where ``value`` lies (keyboard arrows would move the camera) and
-    return the value the slider then shows. No actionability waits: Playwright's "stable" check
+    wait for the thumb to show a new value. No actionability waits: Playwright's "stable" check
     needs two animation frames alike, which a busy machine can hold off past any timeout (see
     :func:`scroll_into_view`); the track is clicked once its box has stopped moving."""
     thumb, track = slider(frame, label)
@@ -152,7 +152,6 @@ def click_slider(page, frame, label: str, value: float, timeout: float = 90.0) -
         timeout=timeout,
         every=0.2,
     )
-    return float(thumb.get_attribute("aria-valuenow"))
 
 
 def press(locator, timeout: float = 90_000) -> None:

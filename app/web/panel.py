@@ -189,17 +189,17 @@ class ControlPanel:
             handle = gui.add_checkbox(label, bool(value), hint=_hint(meta))
         elif log:
             lo, hi = math.log10(meta["log_min"]), math.log10(meta["max"])
-            marks: list[tuple[float, str]] | tuple[tuple[float, str], ...] | None
-            marks = [(round(x), f"1e{round(x)}") for x in (lo, hi)]
+            marks: tuple[tuple[float, str], ...] | None
+            marks = tuple((round(x), f"1e{round(x)}") for x in (lo, hi))
             if meta.get("paper"):
-                marks.append((math.log10(meta["paper"]), "paper"))
+                marks += ((math.log10(meta["paper"]), "paper"),)
             handle = gui.add_slider(
                 f"{meta['label']}, log10",
                 lo,
                 hi,
                 0.1,
                 self._to_slider(value, meta),
-                marks=tuple(marks),
+                marks=marks,
                 hint=_hint(meta),
             )
         else:
