@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test lint clean chromium
+.PHONY: run test check lint clean chromium
 
 $(BIN)/python:
 	@$(PY) -c 'import sys; assert sys.version_info[:2] == (3, 11)' 2>/dev/null \
@@ -39,6 +39,11 @@ chromium:
 # share this 2-core machine's time well.
 test: $(TEST_STAMP) chromium
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
+
+# The quick inner loop: unit, API and headless tests; no browser, no study, no wheel build,
+# no load test, no mypy (tests/conftest.py marks them). make test still runs everything.
+check: $(TEST_STAMP)
+	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not browser and not slow"
 
 # Style and types: ruff's rules and formatting everywhere, mypy on app and controller.
 lint: $(TEST_STAMP)

@@ -32,10 +32,7 @@ from __future__ import annotations
 import asyncio
 import json
 import os
-import signal
-import socket
 import statistics
-import subprocess
 import sys
 import threading
 import time
@@ -43,6 +40,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, cast
 
 import httpx
+
+from app.local_server import local_server, wait_healthy
 
 if TYPE_CHECKING:
     from websockets.typing import Subprotocol
@@ -52,12 +51,6 @@ WARMUP_S = 5.0  # [s] after the viewers connect, before sampling
 MEMORY_WARMUP_SHARE = 0.2  # the server's memory is compared from this share of the run on
 VIEWER_NICE = 10  # nice steps of the viewers' thread (0: same priority as the server)
 CLK_TCK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100  # /proc time unit [1/s]
-
-
-def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
 
 
 def rss_mb(pid: int) -> float | None:
@@ -281,64 +274,56 @@ def run_loadtest(
     """Start (or use) a server, load it, and return the figures (see the module docstring)."""
     if robots not in METHOD_SETS:
         raise ValueError(f"robots must be 1, 2 or 3, got {robots}")
-    proc = None
-    if port is None:
-        port, viser_port = free_port(), free_port()
-        exe = Path(sys.executable).with_name("pelvic-walk")
-        proc = subprocess.Popen(
-            [
-                str(exe),
-                "serve",
-                "--port",
-                str(port),
-                "--viser-port",
-                str(viser_port),
-                *(serve_args or []),
-            ],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.PIPE,
-            text=True,
+    if port is not None:
+        if viser_port is None:
+            raise ValueError("--viser-port is needed with --port")
+        base = f"http://127.0.0.1:{port}"
+        wait_healthy(base)
+        return _load(base, viser_port, None, viewers, robots, seconds, viewer_nice)
+    with local_server(serve_args or []) as server:
+        return _load(
+            server.base, server.viser_port, server.proc.pid, viewers, robots, seconds, viewer_nice
         )
-    elif viser_port is None:
-        raise ValueError("--viser-port is needed with --port")
-    base = f"http://127.0.0.1:{port}"
-    try:
-        _wait_healthy(base, proc)
-        r = httpx.put(f"{base}/api/params", json={"methods": METHOD_SETS[robots]}, timeout=30)
-        r.raise_for_status()
-        mem0 = rss_mb(proc.pid) if proc else None
-        memory = (lambda: rss_mb(proc.pid)) if proc else (lambda: None)
-        meter = CpuMeter(proc.pid) if proc else None
-        out = _in_viewer_thread(
-            _run(
-                base,
-                f"ws://127.0.0.1:{viser_port}",
-                viewers,
-                seconds,
-                memory,
-                meter.sample if meter else (lambda: None),
-            ),
-            viewer_nice,
-        )
-        out.update(
-            robots=robots,
-            viewer_nice=viewer_nice,
-            memory_mb_start=mem0,
-            memory_mb_end=rss_mb(proc.pid) if proc else None,
-            health=httpx.get(f"{base}/api/health", timeout=10).json(),
-        )
-        warm, end = out["memory_mb_after_warmup"], out["memory_mb_end"]
-        if warm and end:
-            out["memory_growth_percent"] = 100 * (end / warm - 1)
-        return out
-    finally:
-        if proc is not None:
-            proc.send_signal(signal.SIGINT)
-            try:
-                proc.wait(20)
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait(5)
+
+
+def _load(
+    base: str,
+    viser_port: int,
+    pid: int | None,
+    viewers: int,
+    robots: int,
+    seconds: float,
+    viewer_nice: int,
+) -> dict[str, Any]:
+    """The load itself against a healthy server; ``pid``: the server's process when this
+    process started it (its memory and CPU are then read too)."""
+    r = httpx.put(f"{base}/api/params", json={"methods": METHOD_SETS[robots]}, timeout=30)
+    r.raise_for_status()
+    memory = (lambda: rss_mb(pid)) if pid else (lambda: None)
+    mem0 = memory()
+    meter = CpuMeter(pid) if pid else None
+    out = _in_viewer_thread(
+        _run(
+            base,
+            f"ws://127.0.0.1:{viser_port}",
+            viewers,
+            seconds,
+            memory,
+            meter.sample if meter else (lambda: None),
+        ),
+        viewer_nice,
+    )
+    out.update(
+        robots=robots,
+        viewer_nice=viewer_nice,
+        memory_mb_start=mem0,
+        memory_mb_end=memory(),
+        health=httpx.get(f"{base}/api/health", timeout=10).json(),
+    )
+    warm, end = out["memory_mb_after_warmup"], out["memory_mb_end"]
+    if warm and end:
+        out["memory_growth_percent"] = 100 * (end / warm - 1)
+    return out
 
 
 def _in_viewer_thread(coro, nice: int) -> dict[str, Any]:
@@ -365,21 +350,6 @@ def _in_viewer_thread(coro, nice: int) -> dict[str, Any]:
     if "error" in result:
         raise result["error"]
     return result["out"]
-
-
-def _wait_healthy(base: str, proc: subprocess.Popen | None, timeout: float = 120.0) -> None:
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        if proc is not None and proc.poll() is not None:
-            err = proc.stderr.read() if proc.stderr else ""
-            raise RuntimeError(f"serve exited with {proc.returncode}: {err[-1000:]}")
-        try:
-            if httpx.get(f"{base}/api/health", timeout=2).status_code == 200:
-                return
-        except httpx.HTTPError:
-            pass
-        time.sleep(0.5)
-    raise RuntimeError(f"no server answered at {base} within {timeout:.0f} s")
 
 
 def _below(r: dict[str, Any], level: float) -> int:

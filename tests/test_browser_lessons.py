@@ -1,207 +1,152 @@
-"""Real-browser test of the guided lessons (Learn tab): each button sets the parameters, the
-robots and the camera view, and the lesson's live numbers appear and move.
+"""Real-browser tests of the guided lessons (Learn tab): each button sets the parameters, the
+robots and the camera view, and the lesson's live numbers appear and move; the kinematic
+analysis draws eq. 5 both ways.
 
-The server runs in this process (the shared session in a thread, as ``serve --workers 0``)
-so the test can read what the browser reports of its camera: viser calls a camera's
-``on_update`` only for messages from the browser, so a reported pose equal to the lesson's
-named view means the browser's camera really moved there. Screenshots of two lessons go to
-``tests/artifacts/`` (looked at by people; nothing here asserts on pixels).
+The tool runs in this process (``tests/browser_util.in_process``) so a test can read the camera
+the browser reports: a reported pose equal to the lesson's named view means the browser's
+camera really moved there. One page serves every lesson (one test each, in order, so a failing
+lesson does not hide the others). Screenshots of two lessons go to ``tests/artifacts/``
+(looked at by people; nothing here asserts on pixels).
 """
 
 from __future__ import annotations
 
-import contextlib
-import logging
 import re
-import threading
 import time
 
-import httpx
-import numpy as np
 import pytest
 from browser_util import (
-    ARTIFACTS,
-    CHROME_ARGS,
-    CHROMIUM,
-    close_notice,
-    free_port,
+    camera_reports,
+    chromium,
+    get,
+    needs_chromium,
+    open_scene,
+    open_tab,
     press,
+    screenshot,
     scroll_into_view,
     wait_for,
+    wait_until,
 )
 
 from app.web.camera import camera_pose
 from app.web.learn_gui import COLUMNS
 from app.web.lessons import LESSONS
 
-pytestmark = [
-    pytest.mark.browser,
-    pytest.mark.skipif(not __import__("os").path.exists(CHROMIUM), reason=f"{CHROMIUM} missing"),
-]
+pytestmark = needs_chromium
 SMALL, LARGE = {"width": 1100, "height": 760}, {"width": 1400, "height": 900}
 SCREENSHOTS = {0: "lesson_reach.png", 4: "lesson_waist_rate.png"}  # lesson index -> file
 
 
-class _Errors(logging.Handler):
-    """Collects the display thread's logged errors (a drawing bug is logged, not raised)."""
+@pytest.fixture(scope="module")
+def learn_page():
+    """(tool, page, scene, camera reports) with the Learn tab open, for every test here."""
+    from browser_util import in_process
 
-    def __init__(self):
-        super().__init__(logging.ERROR)
-        self.records: list[str] = []
+    with in_process() as tool, chromium() as browser:
+        page, scene = open_scene(browser, tool.base + "/", SMALL)  # less to render in software
+        cams = camera_reports(tool.viser)
+        open_tab(scene, "Learn")
+        yield tool, page, scene, cams
+        page.context.close()
+    assert tool.errors == [], tool.errors[:3]  # the display thread drew without an error
 
-    def emit(self, record):
-        self.records.append(self.format(record))
+
+def _live_t(box) -> float:
+    """The lesson time its live numbers show ("t = 12.3 s into the lesson")."""
+    return float(re.search(r"t = ([\d.]+) s", box.inner_text()).group(1))
 
 
-@contextlib.contextmanager
-def _server():
-    import uvicorn
-    import viser
+@pytest.mark.parametrize("i", range(len(LESSONS)), ids=[f"lesson{i + 1}" for i in range(7)])
+def test_a_lesson_sets_params_view_and_shows_live_numbers(learn_page, i):
+    tool, page, scene, cams = learn_page
+    lesson = LESSONS[i]
+    learn = tool.display.views[None].panel.learn
 
-    from app.live.registry import SessionRegistry
-    from app.live.session import initial_intent
-    from app.web.api import create_app
-    from app.web.view import Display
+    # the parameters (GET /api/params) and the robots; a click that a starved software-WebGL
+    # page dropped is repeated after 20 s (a lesson started twice is harmless)
+    pressed: list[float] = []
 
-    port, viser_port = free_port(), free_port()
-    vs = viser.ViserServer(host="127.0.0.1", port=viser_port, verbose=False)
-    registry = SessionRegistry.start("shared", initial_intent())
-    display = Display(vs, registry, 5.0).start()  # software WebGL: fewer redraws
-    app = create_app(registry, viser_port=viser_port, health_extra=display.health)
-    server = uvicorn.Server(
-        uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning", lifespan="off")
+    def started():
+        b = get(tool.base, "params")
+        if (
+            b["methods"] == list(lesson.methods)
+            and b["walk"]["step_length"] == pytest.approx(lesson.walk["step_length"])
+            and learn.lesson is lesson
+        ):
+            return b
+        if not pressed or time.monotonic() - pressed[-1] > 20.0:
+            cams.clear()
+            button = scene.get_by_role("button", name=lesson.title).first
+            scroll_into_view(button)
+            press(button)
+            pressed.append(time.monotonic())
+        return None
+
+    params = wait_until(started, f"{lesson.title}: the parameters to change", every=0.5)
+    for group, values in lesson.groups.items():
+        for name, value in values.items():
+            assert params[group][name] == value, (lesson.title, group, name)
+
+    # the view: the browser reports the lesson's named camera pose
+    n = len(lesson.methods)
+    pos, _look, up, _fov = camera_pose(
+        lesson.view, n, cams.client.camera.aspect, lesson.view == "side"
     )
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    try:
-        assert wait_for(lambda: server.started, timeout=30), "uvicorn did not start"
-        yield f"http://127.0.0.1:{port}", display, vs
-    finally:
-        server.should_exit = True
-        thread.join(10)
-        display.stop()
-        registry.shutdown()
-        app.state.runs.shutdown()
-        vs.stop()
+    wait_until(lambda: cams.at(pos, up), f"{lesson.title}: the browser camera at {lesson.view}")
+    assert learn.lesson is lesson
 
-
-def _close(a, b, tol=1e-3) -> bool:
-    return bool(np.allclose(np.asarray(a, float), np.asarray(b, float), atol=tol))
-
-
-def test_each_lesson_sets_params_view_and_shows_live_numbers():
-    from playwright.sync_api import sync_playwright
-
-    errors = _Errors()
-    logging.getLogger("app.web.view").addHandler(errors)
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
-    with _server() as (base, display, vs), sync_playwright() as p:
-        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
+    # the lesson's text and its live numbers, read from the robots, moving on
+    box = scene.locator(".lesson-live").first
+    wait_until(lambda: "into the lesson" in box.inner_text(), f"{lesson.title}: live numbers")
+    first = box.inner_text()
+    for key in lesson.numbers:
+        assert COLUMNS[key] in first, (lesson.title, key)
+    assert scene.get_by_text(lesson.paper, exact=False).count() >= 1
+    t0 = _live_t(box)
+    wait_until(lambda: _live_t(box) > t0, f"{lesson.title}: the numbers to move")
+    if i == 0:  # 0.40 m: the fixed pelvis's knee straightens, shown live
+        wait_until(
+            lambda: "knee nearly straight" in box.inner_text(),
+            "lesson 1 to show the fixed pelvis's straight knee",
+        )
+    if i == 5:  # eq. 5's 0.42 m: the fixed robot falls (and the MPC walks)
+        fell = wait_until(
+            lambda: [r for r in get(tool.base, "state")["robots"] if r["falls"] >= 1],
+            "lesson 6: a fall",
+        )
+        assert [r["method"] for r in fell] == ["fixed"], fell
+    if i in SCREENSHOTS:
+        page.set_viewport_size(LARGE)
         try:
-            page = browser.new_page(viewport=SMALL)  # less to render in software WebGL
-            page.goto(base + "/")
-            scene = page.frame_locator("#scene")
-            scene.locator("canvas").first.wait_for(state="visible", timeout=60_000)
-            client = wait_for(lambda: next(iter(vs.get_clients().values()), None))
-            assert client is not None
-            reported: list[tuple[np.ndarray, np.ndarray]] = []
-            client.camera.on_update(
-                lambda cam: reported.append((np.array(cam.position), np.array(cam.up_direction)))
-            )
-            close_notice(scene)
-            press(scene.get_by_role("tab", name="Learn"))
-            learn = display.views[None].panel.learn
-            params = None
-            t_start = time.monotonic()
-            for i, lesson in enumerate(LESSONS):
-                # the parameters (GET /api/params) and the robots; a click that a starved
-                # software-WebGL page dropped is repeated (at most twice)
-                for _attempt in range(3):
-                    reported.clear()
-                    button = scene.get_by_role("button", name=lesson.title).first
-                    scroll_into_view(button)
-                    press(button)
-                    params = wait_for(
-                        lambda lesson=lesson: (
-                            (b := httpx.get(f"{base}/api/params", timeout=5).json())["methods"]
-                            == list(lesson.methods)
-                            and b["walk"]["step_length"]
-                            == pytest.approx(lesson.walk["step_length"])
-                            and learn.lesson is lesson
-                            and b
-                        ),
-                        timeout=15,
-                    )
-                    if params:
-                        break
-                print(f"{time.monotonic() - t_start:5.1f} s: {lesson.title} (click {_attempt + 1})")
-                assert params, f"{lesson.title}: the parameters did not change"
-                for group, values in lesson.groups.items():
-                    for name, value in values.items():
-                        assert params[group][name] == value, (lesson.title, group, name)
-                # the view: the browser reports the lesson's named camera pose
-                n = len(lesson.methods)
-                pos, _look, up, _fov = camera_pose(
-                    lesson.view, n, client.camera.aspect, lesson.view == "side"
-                )
-                moved = wait_for(
-                    lambda pos=pos, up=up: any(
-                        _close(q, pos, 0.05) and _close(u, up) for q, u in list(reported)
-                    ),
-                    timeout=15,
-                )
-                assert moved, f"{lesson.title}: the browser camera did not move to {lesson.view}"
-                assert learn.lesson is lesson
-                # the lesson's text and its live numbers, read from the robots, moving on
-                box = scene.locator(".lesson-live").first
-                text = wait_for(lambda box=box: "into the lesson" in box.inner_text() and box, 30)
-                assert text, f"{lesson.title}: no live numbers"
-                first = box.inner_text()
-                for key in lesson.numbers:
-                    assert COLUMNS[key] in first, (lesson.title, key)
-                assert scene.get_by_text(lesson.paper, exact=False).count() >= 1
-                t0 = float(re.search(r"t = ([\d.]+) s", first).group(1))
-                assert wait_for(
-                    lambda box=box, t0=t0: (
-                        float(re.search(r"t = ([\d.]+) s", box.inner_text()).group(1)) > t0
-                    )
-                ), f"{lesson.title}: the numbers do not move"
-                if i == 0:  # 0.40 m: the fixed pelvis's knee straightens, shown live
-                    assert wait_for(
-                        lambda box=box: "knee nearly straight" in box.inner_text(), 40
-                    ), "lesson 1 never showed the fixed pelvis's straight knee"
-                if i == 5:  # eq. 5's 0.42 m: the fixed robot falls (and the MPC walks)
-                    fell = wait_for(
-                        lambda: [
-                            r
-                            for r in httpx.get(f"{base}/api/state", timeout=30).json()["robots"]
-                            if r["falls"] >= 1
-                        ],
-                        60,
-                    )
-                    assert fell and [r["method"] for r in fell] == ["fixed"], fell
-                if i in SCREENSHOTS:
-                    page.set_viewport_size(LARGE)
-                    time.sleep(6 if i else 3)
-                    close_notice(scene)
-                    for _ in range(5):  # the numbers are re-rendered twice a second
-                        with contextlib.suppress(Exception):
-                            box.evaluate("e => e.scrollIntoView({block: 'start'})")
-                            break
-                    page.screenshot(path=str(ARTIFACTS / SCREENSHOTS[i]))
-                    page.set_viewport_size(SMALL)
-            print(f"{time.monotonic() - t_start:5.1f} s: all lessons checked")
-            # the kinematic analysis (Fig. 1-2): eq. 5 as printed beside the paper's reading
-            page.set_viewport_size(LARGE)
-            press(scene.get_by_text("Kinematic analysis (Fig. 1-2, eq. 1-5)"))
-            drawing = scene.get_by_text("Eq. 5 as printed").first
-            drawing.wait_for(state="visible", timeout=30_000)
-            drawing.evaluate("e => e.scrollIntoView({block: 'center'})")
-            text = drawing.locator("xpath=ancestor::div[1]").inner_text()
-            assert "0.391 m" in text and "0.421 m" in text and "+33 %" in text
-            time.sleep(1)
-            page.screenshot(path=str(ARTIFACTS / "lesson_analysis.png"))
+            # the page has laid out anew and redrawn once the numbers move again
+            t1 = _live_t(box)
+            wait_until(lambda: _live_t(box) > t1, "the numbers to move at the larger size")
+            close_notice_and_scroll(scene, box)
+            screenshot(page, SCREENSHOTS[i])
         finally:
-            browser.close()
-            logging.getLogger("app.web.view").removeHandler(errors)
-    assert errors.records == [], errors.records[:3]
+            page.set_viewport_size(SMALL)
+
+
+def close_notice_and_scroll(scene, box) -> None:
+    from browser_util import close_notice
+
+    close_notice(scene)
+    # the numbers are re-rendered twice a second: an element gone under us is looked up again
+    wait_for(lambda: box.evaluate("e => e.scrollIntoView({block: 'start'}) || true"), 30)
+
+
+def test_the_kinematic_analysis_draws_eq5_both_ways(learn_page):
+    """Fig. 1-2: eq. 5 as printed beside the reading that gives the paper's 0.42 m."""
+    _tool, page, scene, _cams = learn_page
+    page.set_viewport_size(LARGE)
+    try:
+        press(scene.get_by_text("Kinematic analysis (Fig. 1-2, eq. 1-5)"))
+        drawing = scene.get_by_text("Eq. 5 as printed").first
+        drawing.wait_for(state="visible")
+        scroll_into_view(drawing)
+        text = drawing.locator("xpath=ancestor::div[1]").inner_text()
+        assert "0.391 m" in text and "0.421 m" in text and "+33 %" in text
+        screenshot(page, "lesson_analysis.png")
+    finally:
+        page.set_viewport_size(SMALL)

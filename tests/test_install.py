@@ -14,27 +14,20 @@ from __future__ import annotations
 import os
 import re
 import shutil
-import signal
-import socket
 import subprocess
 import sys
 import sysconfig
-import time
 import zipfile
 from pathlib import Path
 
 import httpx
 import pytest
 
+from app.local_server import local_server
+
 ROOT = Path(__file__).resolve().parents[1]
 SOURCES = ["pyproject.toml", "README.md", "app", "controller", "models", "static", "report"]
 DATA_PACKAGES = {"app.static": "static", "app.reference_report": "report"}
-
-
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
 
 
 def _run(cmd: list[str], **kwargs) -> str:
@@ -177,36 +170,9 @@ def test_app_comes_from_the_wheel(venv):
 
 def test_serve_from_the_installed_wheel(venv):
     home = venv.parent
-    port, viser_port = _free_port(), _free_port()
-    proc = subprocess.Popen(
-        [
-            str(venv / "bin" / "pelvic-walk"),
-            "serve",
-            "--port",
-            str(port),
-            "--viser-port",
-            str(viser_port),
-        ],
-        cwd=home,
-        env=_clean_env(home),
-        stdout=subprocess.PIPE,
-        stderr=subprocess.STDOUT,
-        text=True,
-    )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        deadline = time.monotonic() + 90
-        while time.monotonic() < deadline:
-            if proc.poll() is not None:
-                pytest.fail(f"serve exited with {proc.returncode}: {proc.stdout.read()[-3000:]}")
-            try:
-                if httpx.get(f"{base}/api/health", timeout=1).status_code == 200:
-                    break
-            except httpx.HTTPError:
-                time.sleep(0.3)
-        else:
-            pytest.fail("serve did not answer /api/health within 90 s")
-
+    exe = venv / "bin" / "pelvic-walk"
+    with local_server(exe=exe, env=_clean_env(home), cwd=home) as server:
+        base, viser_port = server.base, server.viser_port
         with httpx.Client(base_url=base, timeout=15) as client:
             page = client.get("/")
             assert page.status_code == 200 and "<title>pelvic-walk" in page.text
@@ -231,10 +197,3 @@ def test_serve_from_the_installed_wheel(venv):
                 r = client.get(asset)
                 assert r.status_code == 200 and len(r.content) > 10_000, asset
             assert "/api/params" in client.get("/openapi.json").json()["paths"]
-    finally:
-        proc.send_signal(signal.SIGINT)
-        try:
-            proc.wait(15)
-        except subprocess.TimeoutExpired:
-            proc.kill()
-            proc.wait(5)
