@@ -158,7 +158,8 @@ class ComMpc:
         self._q_zmp = params.alpha * Pzu.T  # (N, N)
         self._q_dv = params.beta * Pdu.T @ self.dvel_from_state  # (N, 3)
         self.A_ctrl, self.B_ctrl = lipm_discrete(self.control_dt)
-        self._sample_offsets = self.T * np.arange(1, N + 1)  # (N,) k T_p [s]
+        # (N,) k T_p [s], one object per set_params (the walker's plan table keys on it)
+        self.sample_offsets = self.T * np.arange(1, N + 1)
         if old_n is not None and old_n != N:
             self.solver.reset()
             self._prev_jerk = None
@@ -195,7 +196,7 @@ class ComMpc:
 
     def sample_times(self, t: float) -> np.ndarray:
         """(N,) [s] the predicted samples' absolute times t + k T_p, k = 1..N."""
-        return t + self._sample_offsets
+        return t + self.sample_offsets
 
     def solve(self, state: np.ndarray, t: float, plan: FootstepPlan) -> ComPlan:
         """Solve eq. (18) at time ``t`` [s] from ``state`` (3, 2) along ``plan``.

@@ -317,15 +317,91 @@ class FootstepPlan:
         return _finish(walk, self.t_start, self.feet_init, steps, feet, n_walk - started)
 
 
+TICK_BLOCK = 100  # ticks a :class:`TickSamples` covers (0.5 s at 200 Hz)
+
+
+class TickSamples:
+    """The plan's samples for the next ``n_ticks`` control ticks, taken ahead in one call.
+
+    A tick at time t reads the plan at t (phase, anchoring), t + dt (foot targets) and the
+    MPC horizon t + offsets (N samples): N + 2 queries of :meth:`FootstepPlan.sample`, some
+    60 numpy calls on a handful of rows. Here one call of that same sampler fills the rows of
+    ``n_ticks`` ticks at once, and a tick's rows are then one index (:meth:`at`), with the
+    values the tick would have sampled itself, bit for bit: the times are the walker's own
+    (its clock advances by ``t += dt``, reproduced by a sequential sum) and every row of
+    the sampler depends on its own time only.
+
+    Args:
+        plan: the plan in force.
+        margin: [m] ZMP box margin (``ComMpcParams.zmp_margin``).
+        dt: [s] control period.
+        offsets: (N,) [s] the horizon's sample offsets k T_p (``ComMpc.sample_offsets``).
+        t0: [s] time of the first tick covered.
+        n_ticks: ticks covered.
+    """
+
+    def __init__(
+        self,
+        plan: FootstepPlan,
+        margin: float,
+        dt: float,
+        offsets: np.ndarray,
+        t0: float,
+        n_ticks: int = TICK_BLOCK,
+    ):
+        self.plan, self.margin, self.dt, self.offsets = plan, margin, dt, offsets
+        steps = np.full(n_ticks, dt)
+        steps[0] = t0
+        self.ticks = np.add.accumulate(steps)  # [s] t0, t0 + dt, (t0 + dt) + dt, ...
+        k = 2 + len(offsets)
+        times = np.empty((n_ticks, k))
+        times[:, 0] = self.ticks
+        times[:, 1] = self.ticks + dt
+        times[:, 2:] = self.ticks[:, None] + offsets
+        self.times = times  # (n_ticks, N + 2) [s] the queried times (unclamped)
+        sample = plan.sample(times.ravel(), margin)
+        self._rows = [a.reshape(n_ticks, k, *a.shape[1:]) for a in sample]
+        self.n_ticks = n_ticks
+
+    def covers(self, plan: FootstepPlan, margin: float, offsets: np.ndarray, t: float, j: int):
+        """True if row ``j`` holds the tick at ``t`` of this plan, margin and horizon."""
+        return (
+            j < self.n_ticks
+            and self.ticks[j] == t
+            and plan is self.plan
+            and offsets is self.offsets
+            and margin == self.margin
+        )
+
+    def at(self, j: int) -> PlanSample:
+        """The plan at tick ``j``'s t, t + dt and horizon (N + 2 rows, views of the table)."""
+        return PlanSample(*(a[j] for a in self._rows))
+
+
+class _Step(NamedTuple):
+    """One step of a plan being built (the per-step columns of :class:`FootstepPlan`)."""
+
+    start: float  # [s]
+    duration: float  # [s]
+    dsp: float  # [s] before the lift-off
+    height: float  # [m]
+    side: int  # the swinging foot, LEFT / RIGHT
+    frm: np.ndarray  # (3,) [m] lift-off point
+    to: np.ndarray  # (3,) [m] foothold
+    support: np.ndarray  # (3,) [m]
+    zmp_from: np.ndarray  # (2,) [m]
+    dsp_end: float  # [s] after the touch-down
+
+
 class _Steps:
-    """Accumulates steps as lists (plans have tens of steps: a loop here is fine)."""
+    """Accumulates steps (plans have tens of steps: a loop here is fine)."""
 
     def __init__(self) -> None:
-        self.rows: list[tuple] = []
+        self.rows: list[_Step] = []
 
     def add(self, start, duration, dsp, height, side, frm, to, support, zmp_from, dsp_end) -> None:
         self.rows.append(
-            (
+            _Step(
                 start,
                 duration,
                 dsp,
@@ -339,8 +415,9 @@ class _Steps:
             )
         )
 
-    def column(self, i: int, dtype: type = float) -> np.ndarray:
-        return np.array([r[i] for r in self.rows], dtype=dtype)
+    def column(self, name: str, dtype: type = float) -> np.ndarray:
+        """One field of every step, stacked ((n,) or (n, k))."""
+        return np.array([getattr(r, name) for r in self.rows], dtype=dtype)
 
 
 def _finish(
@@ -364,10 +441,12 @@ def _finish(
     half_w = walk.step_width / 2.0
     if steps.rows:
         last = steps.rows[-1]
-        t = last[0] + last[1]
-        swing = 1 - last[4]
+        t = last.start + last.duration
+        swing = 1 - last.side
         # the ZMP where the last step left it: its support foot, or on to the landed foot
-        zmp_prev = last[7][:2] + (0.5 * (last[6][:2] - last[7][:2]) if last[9] > 0 else 0.0)
+        zmp_prev = last.support[:2] + (
+            0.5 * (last.to[:2] - last.support[:2]) if last.dsp_end > 0 else 0.0
+        )
     else:
         t = t_start
         swing = first_swing
@@ -400,23 +479,23 @@ def _finish(
     return FootstepPlan(
         walk=walk,
         t_start=float(t_start),
-        step_start=steps.column(0),
+        step_start=steps.column("start"),
         dsp_time=dsp,
         ssp_time=walk.step_time - dsp,
-        swing_side=steps.column(4, int),
-        swing_from=np.array([r[5] for r in steps.rows]),
-        swing_to=np.array([r[6] for r in steps.rows]),
-        support_pos=np.array([r[7] for r in steps.rows]),
+        swing_side=steps.column("side", int),
+        swing_from=steps.column("frm"),
+        swing_to=steps.column("to"),
+        support_pos=steps.column("support"),
         t_end=float(t + final_dsp + FINAL_STAND),
         n_walking_steps=int(n_walk),
-        step_duration=steps.column(1),
-        step_dsp=steps.column(2),
-        step_height=steps.column(3),
-        zmp_from=np.array([r[8] for r in steps.rows]),
+        step_duration=steps.column("duration"),
+        step_dsp=steps.column("dsp"),
+        step_height=steps.column("height"),
+        zmp_from=steps.column("zmp_from"),
         feet_init=np.array(feet_init, dtype=float),
         feet_final=feet,
         final_dsp_time=float(final_dsp),
-        step_dsp_end=steps.column(9),
+        step_dsp_end=steps.column("dsp_end"),
     )
 
 

@@ -41,7 +41,14 @@ import numpy as np
 
 from controller.arm_swing import build_arm_qp, solve_arm
 from controller.com_mpc import ComMpc, ComPlan
-from controller.footsteps import LEFT, RIGHT, FootstepPlan, PlanSample, plan_footsteps
+from controller.footsteps import (
+    LEFT,
+    RIGHT,
+    FootstepPlan,
+    PlanSample,
+    TickSamples,
+    plan_footsteps,
+)
 from controller.ik import build_ik, foot_velocity_command, solve_ik
 from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
 from controller.params import ControllerParams, horizon_samples
@@ -49,12 +56,18 @@ from controller.pelvis_mpc import PelvisMpc, PelvisPlan
 from controller.pelvis_reference import lateral_distances, reference_pelvic_angles
 from controller.qp import QpSolver
 
-LAYERS = ("kinematics", "com_mpc", "pelvis_mpc", "ik", "arm_swing")
+LAYERS = ("plan", "kinematics", "com_mpc", "pelvis_mpc", "ik", "arm_swing")
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True, eq=False)
 class TickOutput:
-    """Everything one tick produced: joint targets plus what the displays and metrics need."""
+    """Everything one tick produced: joint targets plus what the displays and metrics need.
+
+    Read-only by contract (nothing changes one once returned). The diagnostics of eq. (45)
+    and the leg reach (``kappa_low``, ``kappa_legs``, ``reach``) are not inputs of any layer:
+    they are computed from this tick's kinematics on first read, so a reader pays for them at
+    its own rate (a headless run's series every tick, the live displays at their frame rate).
+    """
 
     t: float  # [s] time of the tick
     q_target: np.ndarray  # (n_joints,) joint position targets for the servos [rad]
@@ -67,22 +80,43 @@ class TickOutput:
     p_world_pelvis_des: np.ndarray  # (3,) desired pelvis position (eq. 19) [m]
     p_world_com_des: np.ndarray  # (2,) desired CoM x, y [m]
     p_world_com_meas: np.ndarray  # (3,) CoM from measured joints, support-anchored [m]
-    p_world_feet_des: np.ndarray  # (2, 3) desired left/right sole positions [m]
     zmp_ref: np.ndarray  # (2,) ZMP reference now [m]
     waist_angle: float  # [rad] commanded waist yaw (theta_pel)
     waist_rate: float  # [rad/s]
     h_low: float  # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
     h_up: float  # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
-    kappa: float  # kappa(J_low) (eq. 45 on the 12 x 13 J of eq. 9), every method alike
-    kappa_legs: float  # kappa of J_low's 12 leg columns (without the waist), every method:
-    # the one that sees a straight knee (the waist column hides it in J_low)
-    reach: np.ndarray  # (2,) hip-to-ankle distance / leg length, left and right
+    kin: KinState  # kinematics of the commanded joints the IK ran on (J_low, soles, hips)
     step_index: int  # current step (-1 before the first, n after the last)
     in_ssp: bool
     swing_side: int
     failures: dict[str, bool]  # which QP failed this tick (layer -> bool)
     speed_limited: bool  # a joint velocity sat at its limit
     layer_s: dict[str, float] = field(default_factory=dict)  # [s] time per layer (with clock)
+    _diagnostics: tuple[float, float, np.ndarray] | None = None  # cache of the three below
+
+    def _diagnosed(self) -> tuple[float, float, np.ndarray]:
+        if self._diagnostics is None:
+            # eq. (45) on the same matrices for every method (the waist rate is pinned in
+            # fixed and mpc alike, so neither matrix favours a method)
+            kappa_low, kappa_legs = jacobian_conditions(self.kin.J_low)
+            self._diagnostics = (kappa_low, kappa_legs, leg_reach(self.kin))
+        return self._diagnostics
+
+    @property
+    def kappa_low(self) -> float:
+        """kappa(J_low) (eq. 45 on the 12 x 13 J of eq. 9), every method alike."""
+        return self._diagnosed()[0]
+
+    @property
+    def kappa_legs(self) -> float:
+        """kappa of J_low's 12 leg columns (without the waist), every method: the one that
+        sees a straight knee (the waist column hides it in J_low)."""
+        return self._diagnosed()[1]
+
+    @property
+    def reach(self) -> np.ndarray:
+        """(2,) hip-to-ankle distance / leg length, left and right (commanded joints)."""
+        return self._diagnosed()[2]
 
 
 class Walker:
@@ -139,6 +173,8 @@ class Walker:
         self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
         self._pending: ControllerParams | None = None
         self._com_des_prev: np.ndarray | None = None
+        self._plan_table: TickSamples | None = None  # the plan's rows of the coming ticks
+        self._plan_row = 0  # the row of the next tick in it
 
     # -- parameters --------------------------------------------------------------------------
     def set_params(self, params: ControllerParams) -> None:
@@ -179,41 +215,29 @@ class Walker:
         dt = self.dt
         t = self.t
         clock = self.clock
-        timings: dict[str, float] = dict.fromkeys(LAYERS, 0.0)
-        failures = dict.fromkeys(self.failure_counts, False)
-
-        def lap(name: str, t0: float) -> float:
-            if clock is None:
-                return 0.0
-            now = clock()
-            timings[name] += now - t0
-            return now
-
-        t0 = clock() if clock else 0.0
-        # 1-2. The plan, sampled once per tick: now (phase, anchoring), the next tick (foot
-        # targets) and the CoM MPC's N samples (ZMP reference and bounds, feet for step 6).
+        c0 = clock() if clock else 0.0
+        # 1-2. The plan at t (phase, anchoring), t + dt (foot targets) and the CoM MPC's N
+        # samples (ZMP reference and bounds, feet for step 6): rows of the plan's table.
         com_mpc = self.com_mpc
-        times = com_mpc.sample_times(t)  # (N,) t + k T_p
-        plan = self.plan.sample(np.concatenate(((t, t + dt), times)), p.com.zmp_margin)
+        plan, times = self._plan_rows(t, p.com.zmp_margin)
         in_dsp, standing = bool(plan.in_dsp[0]), bool(plan.standing[0])
         h = slice(2, None)  # the horizon's rows
+        c1 = clock() if clock else 0.0
 
         # 3. CoM MPC (eq. 10-18); predicted CoM over the horizon (eq. 25-26).
         com_plan = com_mpc.solve_references(
             self.com_state, t, times, plan.zmp_ref[h], plan.zmp_lo[h], plan.zmp_hi[h]
         )
-        if not com_plan.ok:
-            failures["com_mpc"] = True
         self.com_state = com_plan.next_state
         p_world_com_des = self.com_state[0].copy()
-        t0 = lap("com_mpc", t0)
+        c2 = clock() if clock else 0.0
 
         # 4. Pelvis position (eq. 19): measured CoM with the support sole at its planned place
         # (both soles, averaged, while both feet are down).
         feet_now = (plan.p_left[0], plan.p_right[0])
         support = None if (standing or in_dsp) else int(plan.support_side[0])
         p_world_com_meas = self._measured_com(q_meas, feet_now, support)
-        t0 = lap("kinematics", t0)
+        c3 = clock() if clock else 0.0
         p_prev = self.p_world_pelvis_des.copy()
         self.p_world_pelvis_des[:2] += (
             p_world_com_des - self._last_com_des(p_world_com_des)
@@ -244,14 +268,13 @@ class Walker:
         waist_rate = 0.0
         if p.method == "mpc":
             pelvis_plan = self.pelvis_mpc.solve(theta, self.theta_dot, theta_ref)
-            failures["pelvis_mpc"] = not pelvis_plan.ok
             waist_rate = pelvis_plan.next_rate
             self.theta_dot = pelvis_plan.next_rate
-        t0 = lap("pelvis_mpc", t0)
+        c4 = clock() if clock else 0.0
 
         # 8. QP inverse kinematics (eq. 39-40) on the commanded state.
         ks: KinState = self.kin.compute(self.q_cmd)
-        t0 = lap("kinematics", t0)
+        c5 = clock() if clock else 0.0
         # foot targets at the next tick (row 1 of the sample), relative to the pelvis
         p_des_l = plan.p_left[1] - self.p_world_pelvis_des
         p_des_r = plan.p_right[1] - self.p_world_pelvis_des
@@ -268,7 +291,7 @@ class Walker:
             v_ff_r,
             p.ik.foot_gain,
         )
-        q_low = self.q_cmd[lower]
+        q_low = self.q_cmd[:13]  # the lower joints (a view: q_cmd is replaced, never written)
         qp = build_ik(
             ks.J_low,
             v_des,
@@ -280,16 +303,15 @@ class Walker:
             p.method,
             waist_rate if p.method == "mpc" else None,
         )
-        q_dot_low, ok = solve_ik(qp, self.ik_solver)
-        if not ok:
-            failures["ik"] = True
+        q_dot_low, ik_ok = solve_ik(qp, self.ik_solver)
+        if not ik_ok:
             q_dot_low = np.zeros(13)  # fall back: hold the last command
         self._last_waist_rate = float(q_dot_low[0])
         speed_limited = bool(np.abs(q_dot_low).max() >= p.ik.joint_speed_limit * 0.999)
-        t0 = lap("ik", t0)
+        c6 = clock() if clock else 0.0
 
         # 9. Arm swing (eq. 41-43) with the lower-body velocities just computed.
-        q_dot_up = np.zeros(len(arms))
+        arm_ok = True
         if p.arms.enabled:
             aqp = build_arm_qp(
                 ks.cmm_yaw_low,
@@ -303,26 +325,28 @@ class Walker:
                 p.arms,
                 dt,
             )
-            q_dot_up, ok = solve_arm(aqp, self.arm_solver)
-            if not ok:
-                failures["arm_swing"] = True
+            q_dot_up, arm_ok = solve_arm(aqp, self.arm_solver)
+            if not arm_ok:
                 q_dot_up = np.zeros(len(arms))
         else:
             # Arms off: return gently to the initial pose (and stay there).
             q_dot_up = np.clip((self.q_init[arms] - self.q_cmd[arms]) / 0.2, -1.0, 1.0)
-        t0 = lap("arm_swing", t0)
+        c7 = clock() if clock else 0.0
 
         # 10. Joint targets (eq. 40).
         q_dot = np.zeros(self.q_cmd.shape[0])
-        q_dot[lower] = q_dot_low
+        q_dot[:13] = q_dot_low
         q_dot[arms] = q_dot_up
         self.q_cmd = self.q_cmd + dt * q_dot
+        failures = {
+            "com_mpc": not com_plan.ok,
+            "pelvis_mpc": pelvis_plan is not None and not pelvis_plan.ok,
+            "ik": not ik_ok,
+            "arm_swing": not arm_ok,
+        }
         for name, failed in failures.items():
-            self.failure_counts[name] += int(failed)
-
-        # eq. (45) on the same matrices for every method (the waist rate is pinned in fixed
-        # and mpc alike, so neither matrix favours a method)
-        kappa_low, kappa_legs = jacobian_conditions(ks.J_low)
+            if failed:
+                self.failure_counts[name] += 1
         self.t = t + dt
         return TickOutput(
             t=t,
@@ -336,24 +360,45 @@ class Walker:
             p_world_pelvis_des=self.p_world_pelvis_des.copy(),
             p_world_com_des=p_world_com_des,
             p_world_com_meas=p_world_com_meas,
-            p_world_feet_des=np.array([plan.p_left[1], plan.p_right[1]]),
             zmp_ref=plan.zmp_ref[0].copy(),
-            waist_angle=float(self.q_cmd[lower[0]]),
+            waist_angle=float(self.q_cmd[0]),
             waist_rate=self._last_waist_rate,
             h_low=float(ks.cmm_yaw_low @ q_dot_low),
             h_up=float(ks.cmm_yaw_up @ q_dot_up),
-            kappa=kappa_low,
-            kappa_legs=kappa_legs,
-            reach=leg_reach(ks),
+            kin=ks,
             step_index=int(plan.step[0]),
             in_ssp=bool(plan.in_ssp[0]),
             swing_side=int(plan.swing_side[0]),
             failures=failures,
             speed_limited=speed_limited,
-            layer_s=timings,
+            layer_s=(
+                {
+                    "plan": c1 - c0,
+                    "com_mpc": c2 - c1,
+                    "kinematics": (c3 - c2) + (c5 - c4),
+                    "pelvis_mpc": c4 - c3,
+                    "ik": c6 - c5,
+                    "arm_swing": c7 - c6,
+                }
+                if clock
+                else {}
+            ),
         )
 
     # -- helpers -----------------------------------------------------------------------------
+    def _plan_rows(self, t: float, margin: float) -> tuple[PlanSample, np.ndarray]:
+        """The plan at t, t + dt and the CoM MPC's N samples (``PlanSample`` of N + 2 rows),
+        and the N sample times t + k T_p: a row of the table of the coming ticks, filled
+        again by the plan's sampler when the plan, the margin or the horizon changed, or the
+        table ran out (``controller.footsteps.TickSamples``: the values the sampler gives)."""
+        offsets = self.com_mpc.sample_offsets
+        table, j = self._plan_table, self._plan_row
+        if table is None or not table.covers(self.plan, margin, offsets, t, j):
+            table = TickSamples(self.plan, margin, self.dt, offsets, t)
+            self._plan_table, j = table, 0
+        self._plan_row = j + 1
+        return table.at(j), table.times[j, 2:]
+
     def _last_com_des(self, now: np.ndarray) -> np.ndarray:
         """The desired CoM of the previous tick (for the feed-forward of eq. 19)."""
         prev = self._com_des_prev

@@ -12,7 +12,7 @@ import math
 import numpy as np
 import pytest
 
-from controller.footsteps import LEFT, RIGHT, FootstepPlan, plan_footsteps
+from controller.footsteps import LEFT, RIGHT, FootstepPlan, TickSamples, plan_footsteps
 from controller.params import WalkParams
 from models.dyros_jet import FOOT_SIZE
 
@@ -139,3 +139,28 @@ def test_a_scalar_time_gives_one_row():
     for a, b in zip(one, many, strict=True):
         np.testing.assert_array_equal(a, b)
         assert len(a) == 1
+
+
+@pytest.mark.parametrize("which", range(5))
+def test_tick_table_holds_what_the_sampler_gives_at_the_ticks_times(which):
+    """The plan's table of the coming ticks is the sampler's answer, bit for bit, at the
+    times a walker queries: t (its clock, advanced by t += dt), t + dt and t + k T_p."""
+    plan = _plans()[which]
+    dt, margin = 0.005, 0.02
+    offsets = 0.1 * np.arange(1, 17)
+    t = 0.4 - 60 * dt  # a table may start anywhere
+    n_ticks = int((plan.t_end + 0.3 - t) / dt)
+    table = TickSamples(plan, margin, dt, offsets, t, n_ticks)
+    for j in range(n_ticks):
+        assert table.covers(plan, margin, offsets, t, j)
+        times = np.concatenate(((t, t + dt), t + offsets))
+        np.testing.assert_array_equal(table.times[j], times)
+        want = plan.sample(times, margin)
+        for name, have, expected in zip(want._fields, table.at(j), want, strict=True):
+            np.testing.assert_array_equal(have, expected, err_msg=f"{name} at tick {j}")
+        t = t + dt
+    assert not table.covers(plan, margin, offsets, t, n_ticks)  # past its end
+    assert not table.covers(plan, margin + 0.01, offsets, table.ticks[0], 0)
+    assert not table.covers(
+        _plans()[0] if which else _plans()[1], margin, offsets, table.ticks[0], 0
+    )

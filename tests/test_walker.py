@@ -182,3 +182,21 @@ def test_peaks_stop_at_a_fall():
     t = session.series.column("t")
     ym = np.abs(session.series.column("yaw_momentum"))
     assert s["yaw_momentum_peak"] == pytest.approx(np.max(ym[t <= s["fall_time"]]))
+
+
+def test_the_tick_reads_the_plan_the_sampler_gives_through_a_replan():
+    """The walker's plan rows (a table filled ahead) are the sampler's answer at the tick's
+    times, also after a replan and a change of the horizon."""
+    session = Session(RunConfig(params=_params("mpc", 0.3, 4)))
+    w = session.walker
+    for i in range(420):
+        if i == 250:
+            w.replace_params(walk=dict(step_length=0.2))
+        if i == 330:
+            w.replace_params(com=dict(horizon=1.2, zmp_margin=0.03))
+        out = session.tick()
+        times = np.concatenate(((out.t, out.t + w.dt), out.com_plan.times))
+        want = w.plan.sample(times, w.params.com.zmp_margin)
+        for name, have, expected in zip(want._fields, out.plan_sample, want, strict=True):
+            np.testing.assert_array_equal(have, expected, err_msg=f"{name} at tick {i}")
+    assert w.plan.walk.step_length == 0.2 and len(out.com_plan.times) == 12

@@ -212,7 +212,7 @@ def robot_frame(
         energy=m.energy if m is not None else 0.0,
         solver_failures=int(sum(session.walker.failure_counts.values())),
         pushing=world.pushing,
-        kappa=out.kappa if out is not None else math.nan,
+        kappa=out.kappa_low if out is not None else math.nan,
         kappa_legs=out.kappa_legs if out is not None else math.nan,
         reach=out.reach.copy() if out is not None else np.full(2, math.nan),
         speed_limited=bool(out is not None and out.speed_limited),

@@ -207,7 +207,7 @@ class Session:
                 m.yaw_momentum,
                 out.h_low,
                 out.h_up,
-                out.kappa,
+                out.kappa_low,
                 out.kappa_legs,
                 cop[0] if cop is not None else nan,
                 cop[1] if cop is not None else nan,
