@@ -38,6 +38,9 @@ import osqp
 import scipy.sparse as sp
 
 INF = 1e20  # OSQP's infinity; DAQP takes the same large bound
+# numpy's reductions called directly (ndarray.sum / .min add a Python-level wrapper per call)
+_sum = np.add.reduce
+_fmin = np.fmin.reduce  # the smallest value, NaNs ignored
 
 
 def frozen(a: np.ndarray) -> np.ndarray:
@@ -150,11 +153,12 @@ class QpSolver:
         return np.array(res.x, dtype=float), status
 
     # -- DAQP ------------------------------------------------------------------------------
-    def _solve_daqp(self, qp: QP) -> tuple[np.ndarray | None, str]:
-        P, q, A = qp.P, qp.q, qp.A
-        bu = np.minimum(qp.u, INF)
-        bl = np.maximum(qp.l, -INF)
-        eq = np.abs(bu - bl) < 1e-12  # equality rows (sense 5)
+    def _solve_daqp(self, qp: QP, gap: np.ndarray) -> tuple[np.ndarray | None, str]:
+        """DAQP on the QP; ``gap`` = u - l (equality rows: |gap| < 1e-12, sense 5)."""
+        P, q, A, l, u = qp
+        bu = np.minimum(u, INF)
+        bl = np.maximum(l, -INF)
+        eq = np.abs(gap) < 1e-12
         eq_key = eq.tobytes()
         model = self._daqp
         if model is None or self._shape != A.shape:
@@ -171,6 +175,11 @@ class QpSolver:
                 return None, f"daqp setup flag {flag}"
             self._daqp, self._shape = model, A.shape
             self._P_obj, self._A_obj, self._eq_key = P, A, eq_key
+        elif _same(P, self._P_obj) and _same(A, self._A_obj) and eq_key == self._eq_key:
+            # the usual tick: new vectors only (P and A are the frozen ones already factored)
+            flag = model.update(f=q, bupper=bu, blower=bl)
+            if flag < 0:
+                return None, f"daqp update flag {flag}"
         else:
             kw: dict[str, np.ndarray] = {}
             if not _same(P, self._P_obj):
@@ -186,7 +195,7 @@ class QpSolver:
             if flag < 0:
                 return None, f"daqp update flag {flag}"
         x, _fval, exitflag, _info = model.solve()
-        if exitflag < 1 or not math.isfinite(x.sum()):
+        if exitflag < 1 or not math.isfinite(_sum(x)):
             return None, f"daqp exitflag {exitflag}"
         return x, "solved"
 
@@ -194,18 +203,20 @@ class QpSolver:
         """Solve; on failure return the previous solution (or zeros) with ok=False."""
         try:
             # Finite data: a sum is finite iff every term is (barring overflow near 1e308).
-            # P and A already checked (the same objects as last time) are not summed again.
-            finite = (
-                math.isfinite(qp.q.sum())
-                and (_same(qp.P, self._P_obj) or math.isfinite(qp.P.sum()))
-                and (_same(qp.A, self._A_obj) or math.isfinite(qp.A.sum()))
-            )
-            if not finite or (qp.l > qp.u + 1e-9).any():
+            # P and A already checked (the same frozen objects as last time) are not summed
+            # again. Crossed bounds (l > u beyond 1e-9; NaN bounds are left to the solver).
+            P, q, A, l, u = qp
+            gap = u - l
+            if not (
+                math.isfinite(_sum(q))
+                and (_same(P, self._P_obj) or math.isfinite(_sum(P, None)))
+                and (_same(A, self._A_obj) or math.isfinite(_sum(A, None)))
+            ) or (len(gap) and _fmin(gap) < -1e-9):
                 x, status = None, "infeasible bounds or non-finite data"
-            elif self.backend == "osqp":
-                x, status = self._solve_osqp(qp)
+            elif self.backend == "daqp":
+                x, status = self._solve_daqp(qp, gap)
             else:
-                x, status = self._solve_daqp(qp)
+                x, status = self._solve_osqp(qp)
         except Exception as exc:  # a solver error must never crash the control loop
             x, status = None, f"error: {exc}"
         if x is None:
