@@ -52,6 +52,21 @@ COLUMNS = (
 )
 
 
+class ColumnIndex:
+    """The position of each column by name (``COL.t`` == 0, ...), so a row is written by
+    column name into the series' buffer and cannot go out of line with ``COLUMNS``."""
+
+    def __init__(self, columns: tuple[str, ...]):
+        for i, name in enumerate(columns):
+            setattr(self, name, i)
+
+    def __getattr__(self, name: str) -> int:  # only for names not set above: a typo
+        raise AttributeError(f"no column {name!r}")
+
+
+COL = ColumnIndex(COLUMNS)
+
+
 class Series:
     """Ring buffer of named float columns with a fixed capacity (rows)."""
 
@@ -73,6 +88,14 @@ class Series:
 
     def new_row(self) -> np.ndarray:
         return np.full(len(self.columns), np.nan)
+
+    def next_row(self) -> np.ndarray:
+        """The buffer's next row (a view, NaN-filled), appended: write it by column index
+        (``row[COL.t] = t``); a column nobody writes stays NaN."""
+        row = self.data[self.count % self.capacity]
+        row.fill(np.nan)
+        self.count += 1
+        return row
 
     def __len__(self) -> int:
         return min(self.count, self.capacity)

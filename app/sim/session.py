@@ -18,8 +18,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.sim.metrics import Series, two_step_windows
-from app.sim.world import Contacts, World, point_in_polygon, polygon_margin
+from app.sim.metrics import COL, Series, two_step_windows
+from app.sim.world import Contacts, World, polygon_test
 from controller.footsteps import FootstepPlan
 from controller.kinematics import RobotKinematics
 from controller.params import ControllerParams
@@ -102,6 +102,7 @@ class Session:
         self.fall_time: float | None = None
         self.fall_reason: str | None = None
         self.landings: dict[int, float] = {}  # step index -> landing error [m]
+        self._landing_key: tuple[FootstepPlan, int, float] | None = None  # plan, step, time
         # step index -> cumulative energy per joint at its start: (200 Hz, substep) [J]
         self.energy_at_step_start: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self.zmp_ticks = 0
@@ -175,8 +176,7 @@ class Session:
         if contacts.cop is None:
             inside, margin, tilt = None, math.nan, math.nan
         else:
-            inside = point_in_polygon(contacts.cop, support)
-            margin = polygon_margin(contacts.cop, support)
+            inside, margin = polygon_test(contacts.cop, support)
             tilt = float(np.max(world.sole_tilts()[contacts.in_contact]))
         return Measurement(
             t=self.walker.t,
@@ -194,45 +194,36 @@ class Session:
         )
 
     def _record(self, out: TickOutput, m: Measurement, tick_ms: float) -> None:
-        """One row of the time series, in the order of app.sim.metrics.COLUMNS."""
+        """One row of the time series (app.sim.metrics.COLUMNS), written by column name."""
+        row, c = self.series.next_row(), COL
+        row[c.t] = m.t
+        row[c.waist_angle] = m.waist_angle
+        row[c.waist_angle_cmd] = out.waist_angle
+        row[c.waist_rate] = out.waist_rate
+        row[c.theta_ref] = out.theta_ref[0]
+        row[c.yaw_momentum] = m.yaw_momentum
+        row[c.h_low] = out.h_low
+        row[c.h_up] = out.h_up
+        row[c.kappa] = out.kappa_low
+        row[c.kappa_legs] = out.kappa_legs
         cop = m.contacts.cop
-        nan = math.nan
-        self.series.append_values(
-            (
-                m.t,
-                m.waist_angle,
-                out.waist_angle,
-                out.waist_rate,
-                out.theta_ref[0],
-                m.yaw_momentum,
-                out.h_low,
-                out.h_up,
-                out.kappa_low,
-                out.kappa_legs,
-                cop[0] if cop is not None else nan,
-                cop[1] if cop is not None else nan,
-                nan if m.cop_inside is None else float(m.cop_inside),
-                m.balance_margin,
-                m.sole_tilt,
-                out.zmp_ref[0],
-                out.zmp_ref[1],
-                m.lipm_zmp[0],
-                m.lipm_zmp[1],
-                m.com[0],
-                m.com[1],
-                m.com[2],
-                out.p_world_com_des[0],
-                out.p_world_com_des[1],
-                out.reach[0],
-                out.reach[1],
-                m.energy,
-                m.energy_substep,
-                tick_ms,
-                out.step_index,
-                float(out.in_ssp),
-                float(out.speed_limited),
-            )
-        )
+        if cop is not None:  # else NaN
+            row[c.cop_x], row[c.cop_y] = cop
+        if m.cop_inside is not None:
+            row[c.zmp_in_support] = m.cop_inside
+        row[c.balance_margin] = m.balance_margin
+        row[c.sole_tilt] = m.sole_tilt
+        row[c.zmp_ref_x], row[c.zmp_ref_y] = out.zmp_ref
+        row[c.lipm_zmp_x], row[c.lipm_zmp_y] = m.lipm_zmp
+        row[c.com_x], row[c.com_y], row[c.com_z] = m.com
+        row[c.com_des_x], row[c.com_des_y] = out.p_world_com_des
+        row[c.reach_left], row[c.reach_right] = out.reach
+        row[c.energy] = m.energy
+        row[c.energy_substep] = m.energy_substep
+        row[c.tick_ms] = tick_ms
+        row[c.step_index] = out.step_index
+        row[c.in_ssp] = out.in_ssp
+        row[c.speed_limited] = out.speed_limited
 
     def _bookkeep(self, out: TickOutput, m: Measurement) -> None:
         """Step starts (energy), landing errors, falls, ZMP and speed-limit counts."""
@@ -251,19 +242,27 @@ class Session:
         # Landing error half a DSP after each touch-down, relative to the support foot
         # (per-step timing: a replan changes the timing of later steps only).
         j = len(self.landings)  # landings are recorded in order
-        if j < n and not self.fell:
-            if m.t >= plan.landing_times()[j] + 0.5 * plan.dsp_after_landing(j):
-                soles = world.sole_positions()
-                side = int(plan.swing_side[j])
-                landed = soles[side, :2] - soles[1 - side, :2]
-                planned = plan.swing_to[j, :2] - plan.support_pos[j, :2]
-                self.landings[j] = float(np.linalg.norm(landed - planned))
+        if j < n and not self.fell and m.t >= self._landing_check_time(plan, j):
+            soles = world.sole_positions()
+            side = int(plan.swing_side[j])
+            landed = soles[side, :2] - soles[1 - side, :2]
+            planned = plan.swing_to[j, :2] - plan.support_pos[j, :2]
+            self.landings[j] = float(np.linalg.norm(landed - planned))
         if not self.fell:  # SPEC section 4
             reason = world.fall_reason()
             if reason is None and m.contacts.other_contact:
                 reason = "a body other than the feet touched the floor"
             if reason is not None:
                 self.fell, self.fall_time, self.fall_reason = True, m.t, reason
+
+    def _landing_check_time(self, plan: FootstepPlan, j: int) -> float:
+        """[s] when step ``j``'s landing error is measured: half a DSP after its touch-down
+        (kept until the plan or the step changes, instead of rebuilt every tick)."""
+        key = self._landing_key
+        if key is None or key[0] is not plan or key[1] != j:
+            when = float(plan.landing_times()[j] + 0.5 * plan.dsp_after_landing(j))
+            self._landing_key = key = (plan, j, when)
+        return key[2]
 
     # -- derived figures ---------------------------------------------------------------------
     def energy_windows(self, substep: bool = False) -> np.ndarray:

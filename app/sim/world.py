@@ -296,16 +296,7 @@ def convex_hull(points: np.ndarray) -> np.ndarray:
 
 def point_in_polygon(p: np.ndarray, hull: np.ndarray, tol: float = 1e-3) -> bool:
     """True if p lies inside the counter-clockwise convex polygon (within tol metres)."""
-    if len(hull) < 3:
-        return False
-    px, py = float(p[0]), float(p[1])
-    pts = np.asarray(hull, dtype=float).tolist()
-    for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1], strict=True):
-        ex, ey = bx - ax, by - ay
-        length = math.sqrt(ex * ex + ey * ey)
-        if length == 0.0 or not (ex * (py - ay) - ey * (px - ax)) / length >= -tol:
-            return False  # (a degenerate edge gave NaN before: not inside)
-    return True
+    return polygon_test(p, hull, tol)[0]
 
 
 def polygon_margin(p: np.ndarray, hull: np.ndarray) -> float:
@@ -315,22 +306,36 @@ def polygon_margin(p: np.ndarray, hull: np.ndarray) -> float:
     beyond an edge line (the exact distance unless the nearest point is a corner, where it
     is a little less); -inf for a polygon with fewer than 3 vertices.
     """
+    return polygon_test(p, hull)[1]
+
+
+def polygon_test(p: np.ndarray, hull: np.ndarray, tol: float = 1e-3) -> tuple[bool, float]:
+    """(:func:`point_in_polygon`, :func:`polygon_margin`) of p in one walk over the edges.
+
+    Inside: p is within ``tol`` of the left of every edge (a degenerate, zero-length edge
+    makes it not inside). The margin skips degenerate edges.
+    """
     if len(hull) < 3:
-        return -math.inf
+        return False, -math.inf
     px, py = float(p[0]), float(p[1])
     pts = np.asarray(hull, dtype=float).tolist()
+    inside = True
     margin = math.inf
     outside = 0.0
     for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1], strict=True):
         ex, ey = bx - ax, by - ay
+        cross = ex * (py - ay) - ey * (px - ax)  # > 0 left of the edge: inside
+        length = math.sqrt(ex * ex + ey * ey)
+        if length == 0.0 or not cross / length >= -tol:
+            inside = False  # (a degenerate edge gave NaN before: not inside)
         length = math.hypot(ex, ey)
         if length == 0.0:
             continue
-        d = (ex * (py - ay) - ey * (px - ax)) / length  # > 0 left of the edge: inside
+        d = cross / length
         margin = min(margin, d)
         if d < 0.0:
             outside = max(outside, -d)
-    return margin if margin >= 0.0 else -outside
+    return inside, (margin if margin >= 0.0 else -outside)
 
 
 def _as_slice(idx: np.ndarray) -> slice | np.ndarray:
