@@ -200,3 +200,32 @@ def test_the_tick_reads_the_plan_the_sampler_gives_through_a_replan():
         for name, have, expected in zip(want._fields, out.plan_sample, want, strict=True):
             np.testing.assert_array_equal(have, expected, err_msg=f"{name} at tick {i}")
     assert w.plan.walk.step_length == 0.2 and len(out.com_plan.times) == 12
+
+
+def test_a_session_measured_at_display_rate_walks_and_measures_as_one_measured_every_tick():
+    """record=False (live) skips the per-tick measurement and series: the walk is the same,
+    and a measurement taken when read equals the every-tick one (its LIPM ZMP needs the tick
+    before measured too)."""
+    cfg = RunConfig(params=_params("mpc", 0.3, 2))
+    every, lazy = Session(cfg), Session(cfg, record=False)
+    for i in range(700):
+        a, b = every.tick(), lazy.tick()
+        np.testing.assert_array_equal(a.q_target, b.q_target)
+        if i % 7 in (0, 1):  # read at some ticks only, two in a row now and then
+            ma, mb = every.measured, lazy.measured
+            assert ma is not None and mb is not None
+            np.testing.assert_array_equal(ma.support, mb.support)
+            np.testing.assert_array_equal(ma.com, mb.com)
+            assert (ma.cop_inside, ma.yaw_momentum, ma.energy) == (
+                mb.cop_inside,
+                mb.yaw_momentum,
+                mb.energy,
+            )
+            if i % 7 == 1:
+                assert np.isfinite(mb.lipm_zmp).all()
+            else:
+                assert np.isnan(mb.lipm_zmp).all()
+            assert (a.kappa_low, a.kappa_legs) == (b.kappa_low, b.kappa_legs)
+    assert lazy.fell == every.fell is False
+    assert lazy.energy_at_step_start.keys() == every.energy_at_step_start.keys()
+    assert len(lazy.series) == 0 and len(every.series) == 700

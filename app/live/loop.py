@@ -65,7 +65,6 @@ LIVE_STEPS = 200  # steps per live plan; the robot restarts when it ends
 FALL_RESET_S = 2.0  # [s] of simulated time a fallen robot stays down before it restarts
 RTF_WINDOW_S = 3.0  # [s] of wall time over which the real-time factor is measured
 PUBLISH_HZ = 30.0  # frames per second of wall time while running (the display rate)
-SERIES_S = 4.0  # [s] each robot's own time series ring (the loop reads only its last row)
 STEP_UNTIL_MAX_S = 3.0  # [s] a "next lift-off / landing" step gives up after this
 
 
@@ -259,7 +258,8 @@ class LiveLoop:
     # -- ticking -----------------------------------------------------------------------------
     def _robot(self, method: str, params: ControllerParams) -> _Robot:
         cfg = RunConfig(params=dataclasses.replace(params, method=method))
-        return _Robot(method, Session(cfg, capacity=int(SERIES_S / params.control_dt)))
+        # no series: the displays ask for measurements and kappa when they draw a frame
+        return _Robot(method, Session(cfg, record=False))
 
     def _tick_all(self, intent: Intent) -> None:
         """One control period for every robot; a plot row every HISTORY_DECIMATION ticks.

@@ -12,6 +12,7 @@ solvers), so sessions in different threads or processes never change each other'
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from dataclasses import dataclass, field
@@ -66,13 +67,28 @@ class Measurement:
 class Session:
     """One robot: world + walker + metrics, advanced one control period per :meth:`tick`.
 
+    What is measured when (``record``):
+
+    - every tick, always: the controller, the physics, the energy at each step's start and
+      the fall test (pelvis height, torso tilt, a body other than the feet on the floor);
+    - ``record=True`` (headless runs: ``simulate``, the study, the bench): also every tick,
+      because the summary and the study read every tick (maxima, ratios, landing errors,
+      events): the :class:`Measurement`, its row of the time series, the landing errors
+      and the counts of CoP-in-support and speed-limited ticks;
+    - ``record=False`` (the live tool): no series; :attr:`measured` (contacts, CoP, support
+      polygon, CoM, yaw momentum) and the tick's kappa and reach are computed when a reader
+      first asks after a tick, i.e. at the display rate. Its LIPM ZMP is NaN unless the
+      previous tick was measured too (it differentiates the CoM velocity of two ticks).
+
     Args:
         cfg: parameters, seed and simulation settings.
         capacity: rows kept in the time series (default: the whole plan).
+        record: measure and record every tick (above).
     """
 
-    def __init__(self, cfg: RunConfig, capacity: int | None = None):
+    def __init__(self, cfg: RunConfig, capacity: int | None = None, record: bool = True):
         self.cfg = cfg
+        self.record = record
         params = cfg.params.validated()
         # Its own Pinocchio model and Data: a Data is a mutable workspace, so sessions that
         # share one in different threads corrupt each other's results (2 ms to build).
@@ -97,7 +113,7 @@ class Session:
             clock=time.perf_counter,
         )
         n_ticks = int(math.ceil(self.walker.plan.t_end / params.control_dt)) + 10
-        self.series = Series(capacity or n_ticks)
+        self.series = Series((capacity or n_ticks) if record else 1)
         self.fell = False
         self.fall_time: float | None = None
         self.fall_reason: str | None = None
@@ -109,7 +125,9 @@ class Session:
         self.zmp_inside = 0
         self.speed_limited_ticks = 0
         self.last: TickOutput | None = None
-        self.measured: Measurement | None = None
+        self._measured: Measurement | None = None
+        self._measured_tick = -1  # the tick (count) the last Measurement was taken at
+        self._waist_meas = 0.0  # [rad] measured waist yaw at the start of the last tick
         self._com_vel_prev: np.ndarray | None = None
         self.wall_time = 0.0
         # [s] summed over the ticks: where the time of a control period goes (bench)
@@ -149,10 +167,14 @@ class Session:
         t1 = clock()
         world.step(out.q_target)
         t2 = clock()
-        m = self._measure(float(q_meas[0]))
-        self._record(out, m, (t1 - t0) * 1e3)
-        self._bookkeep(out, m)
-        self.last, self.measured = out, m
+        self.last, self._measured, self._waist_meas = out, None, float(q_meas[0])
+        if self.record:
+            m = self.measured
+            assert m is not None
+            self._record(out, m, (t1 - t0) * 1e3)
+            self._bookkeep(out, m)
+        else:
+            self._energy_and_falls(out, self.t, None)
         t3 = clock()
         split["controller"] += t1 - t0
         split["simulation"] += t2 - t1
@@ -161,6 +183,18 @@ class Session:
         return out
 
     # -- measurement -------------------------------------------------------------------------
+    @property
+    def measured(self) -> Measurement | None:
+        """What the last control period measured (None before the first tick); taken when
+        first read after a tick (every tick with ``record``)."""
+        if self._measured is None and self.last is not None:
+            m = self._measure(self._waist_meas)
+            if not self.record and self._measured_tick != self._ticks - 1:
+                # the CoM velocity of the tick before is not known: no LIPM ZMP
+                m = dataclasses.replace(m, lipm_zmp=np.full(2, math.nan))
+            self._measured, self._measured_tick = m, self._ticks
+        return self._measured
+
     def _measure(self, waist_angle: float) -> Measurement:
         world = self.world
         contacts = world.contacts()
@@ -233,27 +267,37 @@ class Session:
         if m.cop_inside is not None and not self.fell:
             self.zmp_ticks += 1
             self.zmp_inside += int(m.cop_inside)
-        k, n = out.step_index, plan.n
-        if 0 <= k < n and k not in self.energy_at_step_start and not self.fell:
-            self.energy_at_step_start[k] = (
-                world.energy_ctrl_per_joint.copy(),
-                world.energy_substep_per_joint.copy(),
-            )
         # Landing error half a DSP after each touch-down, relative to the support foot
         # (per-step timing: a replan changes the timing of later steps only).
         j = len(self.landings)  # landings are recorded in order
-        if j < n and not self.fell and m.t >= self._landing_check_time(plan, j):
+        if j < plan.n and not self.fell and m.t >= self._landing_check_time(plan, j):
             soles = world.sole_positions()
             side = int(plan.swing_side[j])
             landed = soles[side, :2] - soles[1 - side, :2]
             planned = plan.swing_to[j, :2] - plan.support_pos[j, :2]
             self.landings[j] = float(np.linalg.norm(landed - planned))
-        if not self.fell:  # SPEC section 4
-            reason = world.fall_reason()
-            if reason is None and m.contacts.other_contact:
+        self._energy_and_falls(out, m.t, m.contacts.other_contact)
+
+    def _energy_and_falls(self, out: TickOutput, t: float, other_contact: bool | None) -> None:
+        """Every tick: the energy at each step's start and the fall test (SPEC section 4);
+        ``other_contact`` from the tick's measured contacts, or None to look it up."""
+        if self.fell:
+            return
+        k = out.step_index
+        if 0 <= k < self.walker.plan.n and k not in self.energy_at_step_start:
+            world = self.world
+            self.energy_at_step_start[k] = (
+                world.energy_ctrl_per_joint.copy(),
+                world.energy_substep_per_joint.copy(),
+            )
+        reason = self.world.fall_reason()
+        if reason is None:
+            if other_contact is None:
+                other_contact = self.world.other_contact()
+            if other_contact:
                 reason = "a body other than the feet touched the floor"
-            if reason is not None:
-                self.fell, self.fall_time, self.fall_reason = True, m.t, reason
+        if reason is not None:
+            self.fell, self.fall_time, self.fall_reason = True, t, reason
 
     def _landing_check_time(self, plan: FootstepPlan, j: int) -> float:
         """[s] when step ``j``'s landing error is measured: half a DSP after its touch-down

@@ -243,6 +243,25 @@ class World:
         cop = np.array([mx / total, my / total]) if total > 1e-6 else None
         return Contacts(np.array(in_contact), np.array(fz), cop, other)
 
+    def other_contact(self) -> bool:
+        """A body other than the feet touches the floor (what :meth:`contacts` reports as
+        ``other_contact``, without the forces)."""
+        d = self.data
+        if not d.ncon:
+            return False
+        con = d.contact
+        body, floor, feet = self._geom_body, self.floor_body, self._foot_side
+        for g1, g2 in zip(con.geom1.tolist(), con.geom2.tolist(), strict=True):
+            if body[g1] == floor:
+                robot = g2
+            elif body[g2] == floor:
+                robot = g1
+            else:
+                continue
+            if robot not in feet:
+                return True
+        return False
+
     def support_polygon(self, in_contact: np.ndarray) -> np.ndarray:
         """(M, 2) convex hull (counter-clockwise) of the soles in contact."""
         pts = []
