@@ -1,8 +1,9 @@
 """DYROS-JET-like humanoid model: file paths, names and key numbers.
 
-The MJCF (`robot.xml`, included by `scene.xml`) is written for this project from
-`shared/design/ROBOT.md`; see `README.md` in this folder for the origin of each number and the
-joint sign conventions. This module is pure (numpy only) so that `controller/` may import it.
+The MJCF (`robot.xml`, included by `scene.xml`) is written for this project from the published
+numbers of DYROS-JET, the paper's robot; see `README.md` in this folder for the origin of each
+number and the joint sign conventions, and `docs/DESIGN.md#robot-model`. This module is pure
+(numpy only) so that `controller/` may import it.
 """
 
 from pathlib import Path
