@@ -50,13 +50,16 @@ from controller.qp import QP, QpSolver, frozen
 GRAVITY = 9.81  # [m/s^2]
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True, eq=False)
 class ComPlan:
-    """One CoM MPC solution: the predicted horizon (eq. 25-26) and the state after one tick."""
+    """One CoM MPC solution: the predicted horizon (eq. 25-26) and the state after one tick.
+
+    Read-only by contract. The predicted ZMP (eq. 16-17) feeds no layer: it is computed from
+    the solution on first read (``zmp``), at the rate of the display that draws it.
+    """
 
     times: np.ndarray  # (N,) [s] absolute times of the predicted samples t + k T_p, k = 1..N
     com: np.ndarray  # (N, 2) [m] predicted CoM x, y (eq. 25-26)
-    zmp: np.ndarray  # (N, 2) [m] predicted ZMP
     zmp_ref: np.ndarray  # (N, 2) [m]
     jerk: np.ndarray  # (N, 2) [m/s^3] optimal inputs
     next_state: np.ndarray  # (3, 2) [pos, vel, acc] x (x, y) after one control period
@@ -64,6 +67,18 @@ class ComPlan:
     zmp_lo: np.ndarray | None = None  # (N, 2) [m] ZMP lower bound at the samples
     zmp_hi: np.ndarray | None = None  # (N, 2) [m] ZMP upper bound at the samples
     status: str = ""  # solver status text
+    state: np.ndarray | None = None  # (3, 2) the CoM state the horizon starts from
+    zmp_maps: tuple[np.ndarray, np.ndarray] | None = None  # (Pzs, Pzu) of eq. (16-17)
+    _zmp: np.ndarray | None = None
+
+    @property
+    def zmp(self) -> np.ndarray:
+        """(N, 2) [m] predicted ZMP, Z = Pzs x0 + Pzu U (eq. 16-17)."""
+        if self._zmp is None:
+            assert self.zmp_maps is not None and self.state is not None
+            from_state, from_jerk = self.zmp_maps
+            self._zmp = from_state @ self.state + from_jerk @ self.jerk
+        return self._zmp
 
 
 def lipm_discrete(T: float) -> tuple[np.ndarray, np.ndarray]:
@@ -143,6 +158,7 @@ class ComMpc:
         self._com_from_state, self._com_from_jerk = PA[:N].copy(), PB[:N].copy()  # positions
         self.zmp_from_state = PA[:N] - c * PA[2 * N :]  # (N, 3)
         self.zmp_from_jerk = PB[:N] - c * PB[2 * N :]  # (N, N)
+        self._zmp_maps = (self.zmp_from_state, self.zmp_from_jerk)
         D = np.eye(N) - np.eye(N, k=-1)  # consecutive differences of [v_1..v_N]
         e1v = np.zeros((N, 3))
         e1v[0, 1] = 1.0  # the first difference subtracts v_0
@@ -240,19 +256,19 @@ class ComMpc:
         else:
             jerk = np.zeros((N, 2))
         com = self._com_from_state @ x0 + self._com_from_jerk @ jerk  # (N, 2), eq. (25-26)
-        zmp = self.zmp_from_state @ x0 + self.zmp_from_jerk @ jerk
         next_state = self.A_ctrl @ x0 + self.B_ctrl[:, None] * jerk[0]  # A x0 + B u0
         return ComPlan(
-            times=times,
-            com=com,
-            zmp=zmp,
-            zmp_ref=ref,
-            jerk=jerk,
-            next_state=next_state,
-            ok=bool(res.ok),
-            zmp_lo=lo,
-            zmp_hi=hi,
-            status=res.status,
+            times,
+            com,
+            ref,
+            jerk,
+            next_state,
+            bool(res.ok),
+            lo,
+            hi,
+            res.status,
+            x0,
+            self._zmp_maps,
         )
 
     def zmp_of(self, state: np.ndarray) -> np.ndarray:

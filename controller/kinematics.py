@@ -27,8 +27,8 @@ Conventions:
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 import pinocchio as pin
@@ -53,9 +53,8 @@ _ORIGIN = (0.0, 0.0, 0.0)
 _IDENTITY_WXYZ = (1.0, 0.0, 0.0, 0.0)
 
 
-@dataclass(frozen=True)
-class KinState:
-    """Kinematic quantities with the base (pelvis) at the identity pose."""
+class KinState(NamedTuple):
+    """Kinematic quantities with the base (pelvis) at the identity pose (fresh arrays)."""
 
     T_pelvis_left_sole: np.ndarray  # (4,4) sole pose in the pelvis frame
     T_pelvis_right_sole: np.ndarray  # (4,4)
@@ -83,6 +82,7 @@ class RobotKinematics:
             raise ValueError(f"joint order differs from models.dyros_jet.JOINTS: {names[2:]}")
         self.n_joints = m.nv - 6
         self.lower_v_idx = np.array([m.joints[m.getJointId(n)].idx_v for n in LOWER_JOINTS])
+        self._lower_cols = _as_slice(self.lower_v_idx)  # a slice when contiguous (it is)
         self.arm_qp_v_idx = np.array([m.joints[m.getJointId(n)].idx_v for n in ARM_QP_JOINTS])
         self.arm_qp_joint_idx = np.array([JOINTS.index(n) for n in ARM_QP_JOINTS])
         self.q_min = m.lowerPositionLimit[7:].copy()
@@ -127,23 +127,26 @@ class RobotKinematics:
         pin.computeJointJacobians(m, d)  # uses the kinematics just computed
         lws = pin.LOCAL_WORLD_ALIGNED
         fl, fr = self.sole_frame_ids
-        J_low = np.vstack(
-            (
-                pin.getFrameJacobian(m, d, fl, lws)[:, self.lower_v_idx],
-                pin.getFrameJacobian(m, d, fr, lws)[:, self.lower_v_idx],
-            )
-        )
+        low = self._lower_cols
+        # column-major like Pinocchio's Jacobians (the layout BLAS then reads J_low in)
+        J_low = np.empty((12, len(self.lower_v_idx)), order="F")
+        J_low[:6] = pin.getFrameJacobian(m, d, fl, lws)[:, low]
+        J_low[6:] = pin.getFrameJacobian(m, d, fr, lws)[:, low]
         # Only the frames used here (not all frames of the model).
         upd = pin.updateFramePlacement
+        (hl, hr), (al, ar) = self.hip_frame_ids, self.ankle_joint_ids
+        hips, ankles = np.empty((2, 3)), np.empty((2, 3))
+        hips[0], hips[1] = upd(m, d, hl).translation, upd(m, d, hr).translation
+        ankles[0], ankles[1] = d.oMi[al].translation, d.oMi[ar].translation
         return KinState(
-            T_pelvis_left_sole=upd(m, d, fl).homogeneous,
-            T_pelvis_right_sole=upd(m, d, fr).homogeneous,
-            p_pelvis_com=d.com[0].copy(),
-            J_low=J_low,
-            cmm_yaw_low=Ag[5, self.lower_v_idx],
-            cmm_yaw_up=Ag[5, self.arm_qp_v_idx],
-            p_pelvis_hips=np.array([upd(m, d, i).translation for i in self.hip_frame_ids]),
-            p_pelvis_ankles=np.array([d.oMi[j].translation for j in self.ankle_joint_ids]),
+            upd(m, d, fl).homogeneous,
+            upd(m, d, fr).homogeneous,
+            d.com[0].copy(),
+            J_low,
+            Ag[5, self.lower_v_idx],  # fancy indices: copies (Ag is Data's own buffer)
+            Ag[5, self.arm_qp_v_idx],
+            hips,
+            ankles,
         )
 
     def com_and_soles(self, q_joints: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -197,7 +200,10 @@ def jacobian_conditions(J_low: np.ndarray) -> tuple[float, float]:
     legs = J[:, 1:] @ J[:, 1:].T  # (12, 12), block diagonal: each foot on its own leg
     w = J[:, 0]
     out = []
-    for G in (legs + np.outer(w, w), legs):  # LAPACK directly: numpy's wrapper costs more
+    for G in (
+        legs + w[:, None] * w[None, :],
+        legs,
+    ):  # + np.outer(w, w), without its wrapper  # LAPACK directly: numpy's wrapper costs more
         lam = dsyevd(G, compute_v=0)[0]  # ascending
         out.append(_kappa(math.sqrt(max(lam[-1], 0.0)), math.sqrt(max(lam[0], 0.0))))
     return out[0], out[1]
@@ -207,6 +213,13 @@ def _kappa(s_max: float, s_min: float, floor: float = _EPS) -> float:
     if s_max == 0.0 or s_min <= s_max * floor:
         return float("inf")
     return float(s_max / s_min)
+
+
+def _as_slice(idx: np.ndarray) -> slice | np.ndarray:
+    """``slice(a, b)`` if ``idx`` is the contiguous range a..b-1, else ``idx`` itself."""
+    if len(idx) and np.array_equal(idx, np.arange(idx[0], idx[0] + len(idx))):
+        return slice(int(idx[0]), int(idx[0]) + len(idx))
+    return idx
 
 
 def leg_reach(kin: KinState) -> np.ndarray:
