@@ -19,8 +19,12 @@ Everything comes from one invocation, on one robot, headless:
    per layer and back-end: median / p99 time of ``QpSolver.solve`` (what the controller pays,
    wrapper included) and the max deviation from the exact solution, i.e. a cold one-shot
    DAQP solve of the same QP (an exact active-set solution: its KKT system is solved directly).
-4. **Peer** (``peer``): quoted figures of placo's walk loop on the same robot and machine
-   (measured once outside the repository, see ``PEER``; placo is not a dependency).
+4. **Peer** (``peer``): placo's walk loop (its walk pattern generator and whole-body
+   kinematics QP, no physics) on our robot, in the same run, with our step timing and length
+   (``app/bench_peer.py``, in an interpreter that has placo: ``--peer-python`` or
+   ``$PELVIC_WALK_PEER_PYTHON``; placo pins Pinocchio 3.8, so it lives in its own venv). The
+   URDF it loads is written from our MJCF at run time (:func:`urdf_from_mjcf`). Without placo
+   the bench says so and runs the rest.
 5. **CPU time**: the ``*_cpu`` extras repeat the figures in CPU time of this process
    (``tick_ms_cpu_*`` from a second session), which other jobs on the machine disturb less.
 6. **Paced at 1x** (``paced_core_share``): one robot in a live loop with real sleeps, as a
@@ -50,7 +54,7 @@ import mujoco
 import numpy as np
 
 from app.runs import RunConfig, Session
-from app.sim.world import World
+from app.sim.world import JOINTS, World
 from controller.params import ControllerParams
 from controller.qp import INF, QP, QpSolver, frozen
 
@@ -58,27 +62,6 @@ STEP_LENGTH = 0.3  # [m]
 METHOD = "mpc"
 BACKENDS = ("daqp", "osqp")
 QP_LAYERS = ("ik", "arm_swing", "pelvis_mpc", "com_mpc")
-# Peer figures, measured once on this 2-core machine (load average ~2.7) by a script outside
-# the repository: placo 0.10.2 (C++, in its own venv; not a dependency) running the walk loop
-# of Rhoban/placo-examples walk/walk.py headless on this project's robot (a URDF generated from
-# models/dyros_jet/robot.xml), 0.3 m steps, 3000 ticks after a 160-tick warm-up. A tick is
-# tasks update + whole-body IK QP + support update, plus the LIPM re-plan (a 48-sample QP) on
-# the ticks where it re-plans. With the example's timing (0.38 s single support, no double
-# support) 1.3 % of the ticks re-plan and the p99 lands on them; with this project's 1.2 s
-# steps only 0.4 % re-plan, the p99 misses them, but those ticks take ~14 ms.
-PEER = {
-    "name": "placo 0.10.2 walk loop (walk.py of placo-examples, headless, same robot)",
-    "tick_ms_p99": 7.6,  # example timing (SSP 0.38 s, no DSP)
-    "tick_ms_median": 0.024,
-    "replan_tick_ms_median": 7.7,
-    "replan_tick_share": 0.013,
-    "tick_ms_p99_1p2s_steps": 0.12,  # SSP 0.96 s + DSP 0.24 s: re-plans on 0.4 % of ticks
-    "replan_tick_ms_median_1p2s_steps": 13.8,
-    "tick_ms_max_1p2s_steps": 15.4,
-    "measured_in_this_run": False,
-    "source": "measured once on this machine outside the repository (see app/bench.py); "
-    "issue 6 quotes ~7 ms for the p99",
-}
 
 
 def bench_params(n_ticks: int, control_dt: float = 0.005) -> ControllerParams:
@@ -113,6 +96,7 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         "tick_ms_median": float(np.median(tick)),
         "tick_ms_p99": float(np.percentile(tick, 99)),
         "tick_ms_max": float(np.max(tick)),
+        "tick_ms_mean": float(np.mean(tick)),
         "layer_ms": {
             name: float(np.median([d[name] for d in layer_s])) * 1e3 for name in layer_s[0]
         },
@@ -330,7 +314,144 @@ def compare_backends(record: dict[str, list[QP]]) -> dict[str, Any]:
     return out
 
 
-def run_bench(ticks: int = 600) -> dict[str, Any]:
+# -- the peer (placo) ---------------------------------------------------------------------
+PEER_PYTHON_ENV = "PELVIC_WALK_PEER_PYTHON"  # an interpreter with placo (its own venv)
+PEER_FRAMES = {"pelvis": "trunk", "L_sole": "left_foot", "R_sole": "right_foot"}
+
+
+def urdf_from_mjcf(xml: str | Path) -> str:
+    """A URDF of the robot in ``xml`` (our MJCF), written from MuJoCo's compiled model.
+
+    Links are the bodies (the root body is named ``trunk``, as placo's humanoid expects),
+    with their mass and principal inertia; each hinge becomes a revolute joint with its axis
+    and range, a body without one a fixed joint; the sole sites become fixed frames
+    ``left_foot`` / ``right_foot``. No geometry: the peer runs kinematics only.
+    """
+    m = mujoco.MjModel.from_xml_path(str(xml))
+
+    def name(obj_type: int, i: int) -> str:
+        n = mujoco.mj_id2name(m, obj_type, i)
+        return PEER_FRAMES.get(n, n)
+
+    def origin(pos: np.ndarray, quat: np.ndarray) -> str:
+        w, x, y, z = quat  # rpy of R = Rz(yaw) Ry(pitch) Rx(roll) (URDF's fixed axes)
+        roll = math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))
+        pitch = math.asin(max(-1.0, min(1.0, 2 * (w * y - z * x))))
+        yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
+        return (
+            f'<origin xyz="{pos[0]:.9g} {pos[1]:.9g} {pos[2]:.9g}" '
+            f'rpy="{roll:.9g} {pitch:.9g} {yaw:.9g}"/>'
+        )
+
+    body = int(mujoco.mjtObj.mjOBJ_BODY)
+    lines = ['<?xml version="1.0"?>', f'<robot name="{m.names[: m.names.index(0)].decode()}">']
+    for b in range(1, m.nbody):
+        ixx, iyy, izz = m.body_inertia[b]
+        lines += [
+            f'  <link name="{name(body, b)}"><inertial>{origin(m.body_ipos[b], m.body_iquat[b])}'
+            f'<mass value="{m.body_mass[b]:.9g}"/><inertia ixx="{ixx:.9g}" iyy="{iyy:.9g}" '
+            f'izz="{izz:.9g}" ixy="0" ixz="0" iyz="0"/></inertial></link>'
+        ]
+        parent = int(m.body_parentid[b])
+        if parent == 0:
+            continue  # the root: placo adds the floating base
+        hinges = [
+            j
+            for j in range(m.body_jntadr[b], m.body_jntadr[b] + m.body_jntnum[b])
+            if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE
+        ]
+        joint = origin(m.body_pos[b], m.body_quat[b])
+        link = f'<parent link="{name(body, parent)}"/><child link="{name(body, b)}"/>'
+        if hinges:
+            j = hinges[0]
+            lo, hi = m.jnt_range[j]
+            ax = m.jnt_axis[j]
+            lines.append(
+                f'  <joint name="{name(int(mujoco.mjtObj.mjOBJ_JOINT), j)}" type="revolute">'
+                f'{joint}{link}<axis xyz="{ax[0]:.9g} {ax[1]:.9g} {ax[2]:.9g}"/>'
+                f'<limit lower="{lo:.9g}" upper="{hi:.9g}" effort="300" velocity="10"/></joint>'
+            )
+        else:
+            lines.append(
+                f'  <joint name="{name(body, b)}_fixed" type="fixed">{joint}{link}</joint>'
+            )
+    site = int(mujoco.mjtObj.mjOBJ_SITE)
+    for s in range(m.nsite):
+        frame = name(site, s)
+        if frame in ("left_foot", "right_foot"):
+            lines += [
+                f'  <link name="{frame}"/>',
+                f'  <joint name="{frame}_fixed" type="fixed">'
+                f"{origin(m.site_pos[s], m.site_quat[s])}"
+                f'<parent link="{name(body, int(m.site_bodyid[s]))}"/><child link="{frame}"/>'
+                "</joint>",
+            ]
+    lines.append("</robot>")
+    return "\n".join(lines) + "\n"
+
+
+def peer_python() -> str | None:
+    """The interpreter that runs placo: $PELVIC_WALK_PEER_PYTHON, or this one if it has
+    placo, else None (placo is not installed)."""
+    import importlib.util
+
+    env = os.environ.get(PEER_PYTHON_ENV)
+    if env:
+        return env
+    return sys.executable if importlib.util.find_spec("placo") is not None else None
+
+
+def peer_loop(ticks: int, python: str | None = None) -> dict[str, Any]:
+    """placo's walk loop on our robot (``app/bench_peer.py``) in ``python``; our walking
+    timing, sizes and step length; {"installed": False} without placo."""
+    import subprocess
+    import tempfile
+
+    from models.dyros_jet import FOOT_SIZE, ROBOT_XML
+
+    python = python or peer_python()
+    if python is None:
+        return {"installed": False, "reason": "placo is not installed"}
+    session = Session(RunConfig(params=bench_params(ticks)))
+    p, w = session.params, session.walker
+    q0 = session.world.keyframe_joints()
+    held = {n: float(q) for n, q in zip(JOINTS, q0, strict=True) if not n.startswith(("L_", "R_"))}
+    held.update(
+        {n: float(q) for n, q in zip(JOINTS, q0, strict=True) if "shoulder" in n or "elbow" in n}
+    )
+    with tempfile.TemporaryDirectory() as tmp:
+        urdf = Path(tmp) / "robot.urdf"
+        urdf.write_text(urdf_from_mjcf(ROBOT_XML))
+        cfg = {
+            "urdf": str(urdf),
+            "dt": p.control_dt,
+            "step_length": p.walk.step_length,
+            "step_time": p.walk.step_time,
+            "dsp_ratio": p.walk.dsp_ratio,
+            "foot_height": p.walk.foot_height,
+            "step_width": p.walk.step_width,
+            "foot_size": list(FOOT_SIZE),
+            "zmp_margin": p.com.zmp_margin,
+            "com_height": w.com_height,
+            "held_joints": held,
+            "n_steps": p.walk.n_steps,
+            "ssp_timesteps": 10,
+            "planned_timesteps": 48,
+            "replan_timesteps": 10,
+            "warmup_ticks": _warmup_ticks(session),
+            "ticks": ticks,
+        }
+        script = Path(__file__).with_name("bench_peer.py")
+        done = subprocess.run(
+            [python, str(script), json.dumps(cfg)], capture_output=True, text=True, timeout=600
+        )
+    if done.returncode != 0:
+        tail = (done.stderr or done.stdout).strip().splitlines()[-1:] or ["no output"]
+        return {"installed": True, "error": f"{python}: {tail[0]}"}
+    return {"installed": True, "python": python, **json.loads(done.stdout.strip().splitlines()[-1])}
+
+
+def run_bench(ticks: int = 600, peer_python_path: str | None = None) -> dict[str, Any]:
     """All the figures of one bench run (see the module docstring)."""
     load0 = os.getloadavg()
     probe = World()
@@ -349,6 +470,7 @@ def run_bench(ticks: int = 600) -> dict[str, Any]:
     live = live_loop(ticks)
     paced = paced_loop(ticks)
     qp = compare_backends(record_qps(ticks))
+    peer = peer_loop(ticks, peer_python_path)
     return {
         "tick_ms_median": loop["tick_ms_median"],
         "tick_ms_p99": loop["tick_ms_p99"],
@@ -362,6 +484,7 @@ def run_bench(ticks: int = 600) -> dict[str, Any]:
         **paced,
         # extras
         "tick_ms_max": loop["tick_ms_max"],
+        "tick_ms_mean": loop["tick_ms_mean"],
         "tick_ms_cpu_median": float(np.median(tick_cpu)),
         "tick_ms_cpu_p99": float(np.percentile(tick_cpu, 99)),
         "ticks": ticks,
@@ -379,11 +502,7 @@ def run_bench(ticks: int = 600) -> dict[str, Any]:
         "overhead_ratio_cpu": bare_rtf_cpu / loop_rtf_cpu,
         "fell": loop["fell"],
         "qp_backends": qp,
-        "peer": dict(
-            PEER,
-            ours_tick_ms_p99=loop["tick_ms_p99"],
-            p99_ratio=PEER["tick_ms_p99"] / loop["tick_ms_p99"],
-        ),
+        "peer": peer,
         "machine": {
             "cpu_count": os.cpu_count(),
             "loadavg_start": list(load0),
@@ -435,14 +554,24 @@ def format_report(r: dict[str, Any]) -> str:
             )
         lines.append(f"  {name:11s} {size:>8s}   " + "   ".join(cells))
     peer = r["peer"]
-    ratio = peer["p99_ratio"]
-    side = f"{ratio:.0f}x lower" if ratio >= 1.0 else f"{1.0 / ratio:.1f}x higher"
-    lines.append(
-        f"peer: {peer['name']}: tick p99 {peer['tick_ms_p99']:.1f} ms, median "
-        f"{peer['tick_ms_median']:.3f} ms, re-planning ticks {peer['replan_tick_ms_median']:.1f}"
-        f" ms (quoted, measured outside this run); ours: p99 {peer['ours_tick_ms_p99']:.2f} ms "
-        f"({side}), median {r['tick_ms_median']:.3f} ms"
-    )
+    if not peer.get("installed"):
+        lines.append(
+            f"peer: placo's walk loop not run: {peer.get('reason', 'placo is not installed')} "
+            f"(an interpreter with placo: --peer-python PATH or ${PEER_PYTHON_ENV})"
+        )
+    elif "error" in peer:
+        lines.append(f"peer: placo's walk loop failed: {peer['error']}")
+    else:
+        lines += [
+            f"peer: {peer['name']}, our timing and step length, same ticks",
+            f"  {'tick [ms]':22s} {'median':>8s} {'mean':>8s} {'p99':>8s} {'max':>8s}",
+            f"  {'ours (controller)':22s} {r['tick_ms_median']:8.3f} {r['tick_ms_mean']:8.3f} "
+            f"{r['tick_ms_p99']:8.3f} {r['tick_ms_max']:8.3f}",
+            f"  {'placo':22s} {peer['tick_ms_median']:8.3f} {peer['tick_ms_mean']:8.3f} "
+            f"{peer['tick_ms_p99']:8.3f} {peer['tick_ms_max']:8.3f}   (re-planning ticks "
+            f"{100 * peer['replan_tick_share']:.1f} %, median "
+            f"{peer['replan_tick_ms_median'] or math.nan:.1f} ms)",
+        ]
     m = r["machine"]
     lines.append(
         f"machine: {m['cpu_count']} CPUs, load average {m['loadavg_start'][0]:.2f} at start, "
@@ -451,12 +580,12 @@ def format_report(r: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def main(json_path: Path | None, ticks: int = 600) -> int:
+def main(json_path: Path | None, ticks: int = 600, peer_python_path: str | None = None) -> int:
     """Run the bench, print the summary, write the figures to ``json_path`` if given."""
     if ticks < 1:
         print("pelvic-walk bench: error: --ticks must be at least 1", file=sys.stderr)
         return 2
-    report = run_bench(ticks)
+    report = run_bench(ticks, peer_python_path)
     print(format_report(report))
     if json_path is not None:
         Path(json_path).write_text(json.dumps(report, indent=2))

@@ -144,6 +144,14 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("bench", help="performance figures")
     p.add_argument("--json", type=Path, default=None)
     p.add_argument("--ticks", type=positive_int, default=600)
+    p.add_argument(
+        "--peer-python",
+        default=None,
+        metavar="PATH",
+        help="an interpreter with placo (its own venv: placo pins its own Pinocchio) to run "
+        "placo's walk loop on our robot beside ours (default: $PELVIC_WALK_PEER_PYTHON, or "
+        "this interpreter if it has placo)",
+    )
 
     p = sub.add_parser(
         "push-study",
@@ -294,7 +302,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "bench":
             from app.bench import main as bench_main
 
-            return bench_main(args.json, ticks=args.ticks)
+            return bench_main(args.json, ticks=args.ticks, peer_python_path=args.peer_python)
         if args.command == "push-study":
             from app.pushes import main as push_main
 

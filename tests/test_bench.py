@@ -5,9 +5,10 @@ from __future__ import annotations
 import json
 import math
 
+import numpy as np
 import pytest
 
-from app.bench import BACKENDS, QP_LAYERS, main
+from app.bench import BACKENDS, QP_LAYERS, main, urdf_from_mjcf
 
 INTERFACE_KEYS = (
     "tick_ms_median",
@@ -58,10 +59,43 @@ def test_qp_backend_table(report):
         assert report["qp_backends"][layer]["daqp"]["max_abs_dev"] < 1e-8
 
 
-def test_the_walk_did_not_fall_and_the_peer_is_quoted(report):
+def test_the_walk_did_not_fall_and_the_peer_ran_or_says_why(report):
     assert report["fell"] is False
-    assert report["peer"]["measured_in_this_run"] is False
-    assert _finite_positive(report["peer"]["tick_ms_p99"])
+    peer = report["peer"]
+    if peer["installed"] and "error" not in peer:  # an interpreter with placo was given
+        assert _finite_positive(peer["tick_ms_p99"]) and peer["ticks"] == report["ticks"]
+    elif not peer["installed"]:
+        assert peer["reason"] == "placo is not installed"
+
+
+def test_the_peer_urdf_is_our_robot(tmp_path):
+    """The URDF written for the peer from our MJCF: same joints, limits and mass, and its
+    foot frames where our soles are (Pinocchio reads both)."""
+    import pinocchio as pin
+
+    from controller.kinematics import RobotKinematics
+    from models.dyros_jet import JOINTS, ROBOT_XML
+
+    path = tmp_path / "robot.urdf"
+    path.write_text(urdf_from_mjcf(ROBOT_XML))
+    urdf = pin.buildModelFromUrdf(str(path), pin.JointModelFreeFlyer())
+    ours = RobotKinematics(ROBOT_XML)
+    assert sorted(urdf.names[2:]) == sorted(JOINTS)  # (the URDF's tree order differs)
+    at = [urdf.joints[urdf.getJointId(n)].idx_q for n in JOINTS]  # ours -> the URDF's q
+    assert pin.computeTotalMass(urdf) == pytest.approx(ours.total_mass)
+    np.testing.assert_allclose(urdf.lowerPositionLimit[at], ours.q_min)
+    np.testing.assert_allclose(urdf.upperPositionLimit[at], ours.q_max)
+    q_joints = np.random.default_rng(0).uniform(-0.3, 0.3, len(JOINTS))
+    data = urdf.createData()
+    q = pin.neutral(urdf)
+    q[at] = q_joints
+    pin.framesForwardKinematics(urdf, data, q)
+    for side, frame in enumerate(("left_foot", "right_foot")):
+        want = ours.sole_pose_pelvis(q_joints, side)
+        have = data.oMf[urdf.getFrameId(frame)].homogeneous
+        np.testing.assert_allclose(have, want, atol=1e-12)
+    com = pin.centerOfMass(urdf, data, q)
+    np.testing.assert_allclose(com, ours.com_world(q_joints, (0, 0, 0), (1, 0, 0, 0)), atol=1e-12)
 
 
 def test_bad_ticks_exit_2(capsys):
