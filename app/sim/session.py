@@ -211,7 +211,7 @@ class Session:
             inside, margin, tilt = None, math.nan, math.nan
         else:
             inside, margin = polygon_test(contacts.cop, support)
-            tilt = float(np.max(world.sole_tilts()[contacts.in_contact]))
+            tilt = float(np.maximum.reduce(world.sole_tilts()[contacts.in_contact]))
         return Measurement(
             t=self.walker.t,
             waist_angle=waist_angle,

@@ -158,7 +158,7 @@ class World:
     def sole_tilts(self) -> np.ndarray:
         """(2,) [rad] angle of each sole's normal from the vertical (left, right)."""
         zz = self.data.site_xmat[self.sole_site_ids, 8]  # element (2, 2) of each 3x3
-        return np.arccos(np.clip(zz, -1.0, 1.0))
+        return np.arccos(np.minimum(np.maximum(zz, -1.0), 1.0))  # np.clip without its wrapper
 
     def torso_tilt(self) -> float:
         """Angle between the base z axis and the world z axis [rad]."""
