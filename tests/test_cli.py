@@ -65,7 +65,7 @@ def test_simulate_writes_every_json_key_and_csv(tmp_path, capsys):
     assert summary["success"] is True
     assert summary["steps_planned"] == 2
     header = csv.read_text().splitlines()[0].split(",")
-    assert {"t", "waist_angle", "yaw_momentum", "kappa"} <= set(header)
+    assert {"t", "waist_angle", "yaw_momentum", "kappa_low"} <= set(header)
     assert "success" in capsys.readouterr().out
 
 

@@ -155,7 +155,7 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
     t = series.column("t")
     kappa, kappa_legs = (
         np.minimum(np.nan_to_num(series.column(c), nan=np.nan, posinf=KAPPA_CAP), KAPPA_CAP)
-        for c in ("kappa", "kappa_legs")
+        for c in ("kappa_low", "kappa_legs")
     )
     n_walk = plan.n_walking_steps
     lift = plan.step_start[:n_walk] + plan.step_dsp[:n_walk]

@@ -25,7 +25,7 @@ COLUMNS = (
     "yaw_momentum",  # [kg m^2/s] whole body about the CoM, measured (MuJoCo)
     "h_low",  # [kg m^2/s] commanded lower-body yaw momentum (eq. 41)
     "h_up",  # [kg m^2/s] commanded upper-body yaw momentum (eq. 42)
-    "kappa",  # condition number of J_low, 12 x 13 (eq. 45), every method alike
+    "kappa_low",  # condition number of J_low, 12 x 13 (eq. 45), every method alike
     "kappa_legs",  # condition number of J_low's 12 leg columns, every method alike
     "cop_x",
     "cop_y",  # [m] centre of pressure of the foot contact forces (nan if none)

@@ -238,7 +238,7 @@ class Session:
         row[c.yaw_momentum] = m.yaw_momentum
         row[c.h_low] = out.h_low
         row[c.h_up] = out.h_up
-        row[c.kappa] = out.kappa_low
+        row[c.kappa_low] = out.kappa_low
         row[c.kappa_legs] = out.kappa_legs
         cop = m.contacts.cop
         if cop is not None:  # else NaN

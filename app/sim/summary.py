@@ -105,7 +105,7 @@ def summarize(session: Session) -> dict[str, Any]:
         "yaw_momentum_peak": peak("yaw_momentum"),
         "energy_two_step_mean": float(np.mean(windows)) if len(windows) else None,
         "energy_two_step_std": float(np.std(windows)) if len(windows) else None,
-        "condition_number_max": peak("kappa"),
+        "condition_number_max": peak("kappa_low"),
         "zmp_in_support_ratio": (
             session.zmp_inside / session.zmp_ticks if session.zmp_ticks else 0.0
         ),
