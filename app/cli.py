@@ -51,17 +51,20 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--port", type=_port, default=None)
     p.add_argument("--viser-port", type=_port, default=None)
     p.add_argument(
+        "--report",
         "--report-dir",
+        dest="report_dir",
         type=Path,
         default=None,
-        help="the report /report shows (default: the latest `experiments --out`)",
+        help="the report /report shows (default: your latest `experiments --out` outside "
+        "temporary folders, else the reference report)",
     )
     p.add_argument(
         "--methods",
         nargs="+",
         choices=METHODS,
         default=None,
-        help="the robots every session starts with (default: fixed mpc)",
+        help="the robots every session starts with (default: fixed redundancy mpc)",
     )
     p.add_argument(
         "--workers",
@@ -95,6 +98,22 @@ def build_parser() -> argparse.ArgumentParser:
         type=_finite,
         default=None,
         help="[s] an API-opened private session without calls ends (default 300)",
+    )
+    p.add_argument(
+        "--shared-demo",
+        action=argparse.BooleanOptionalAction,
+        default=None,
+        help="with --sessions private: run the shared demo beside the private sessions (the "
+        "default; it holds its robots' worker slots) or not (--no-shared-demo: every slot "
+        "for private sessions)",
+    )
+    p.add_argument(
+        "--instructor-token",
+        default=None,
+        metavar="TOKEN",
+        help="only the page opened with ?token=TOKEN (and API calls with 'Authorization: "
+        "Bearer TOKEN') change the shared demo; students watch it (or drive their private "
+        "sessions). PELVIC_WALK_INSTRUCTOR_TOKEN keeps it out of the process list",
     )
 
     p = sub.add_parser(
@@ -284,6 +303,8 @@ def main(argv: list[str] | None = None) -> int:
                 args.display_hz,
                 args.idle_timeout,
                 args.methods,
+                args.shared_demo,
+                args.instructor_token,
             )
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main

@@ -35,3 +35,13 @@ def pytest_collection_modifyitems(config, items):
         if not any(item.iter_markers("xdist_group")):
             group = "browser" if browser else item.module.__name__
             item.add_marker(pytest.mark.xdist_group(group))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _own_state_dir(tmp_path_factory):
+    """Tests never write into the user's state: XDG_STATE_HOME (where `experiments` records
+    the reports `/report` shows, app/report_dir.py) points at a folder of this test session,
+    for this process and the servers and studies it starts."""
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setenv("XDG_STATE_HOME", str(tmp_path_factory.mktemp("xdg-state")))
+        yield

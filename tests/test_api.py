@@ -2,7 +2,9 @@
 
 from __future__ import annotations
 
+import os
 import time
+from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
@@ -251,7 +253,7 @@ def test_serve_refuses_workers_that_cannot_hold_the_demo(capsys):
 
     assert serve("127.0.0.1", 1, 2, workers=1, robots_per_worker=1) == 2
     err = capsys.readouterr().err.strip().splitlines()
-    assert len(err) == 1 and "cannot hold the 2 robots" in err[0] and "--workers" in err[0]
+    assert len(err) == 1 and "cannot hold the 3 robots" in err[0] and "--workers" in err[0]
 
 
 def test_worker_layout_gives_every_robot_its_own_worker_by_default(monkeypatch):
@@ -373,22 +375,47 @@ def test_docs_assets_are_served_locally(client):
     assert client.get("/docs-assets/../pyproject.toml").status_code == 404
 
 
-def test_report_serves_the_latest_experiments_output(live, tmp_path, monkeypatch):
+def _outside_temp(monkeypatch, tmp_path):
+    """Folders under ``tmp_path/home`` count as the user's own (not temporary) here."""
+    import app.report_dir as report_dir
+
+    home = tmp_path / "home"
+    monkeypatch.setattr(report_dir, "is_temporary", lambda p: home not in Path(p).parents)
+    return home
+
+
+def test_report_shows_the_reference_unless_the_user_wrote_one(live, tmp_path, monkeypatch):
     from app.report_dir import record_report_dir, reference_report_dir
 
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
+    home = _outside_temp(monkeypatch, tmp_path)
     with TestClient(create_app(live)) as c:
         reference = c.get("/report").text
         assert "<table>" in reference and "<img" in reference
+        assert "Which report:</b> The reference report shipped with pelvic-walk" in reference
+        assert "pelvic-walk experiments --out report" in reference  # its run, from results.json
         figure = sorted((reference_report_dir() / "figures").glob("*.png"))[0]
         assert c.get(f"/report/figures/{figure.name}").content == figure.read_bytes()
-        out = tmp_path / "mine"
+        # a test's run (a temporary folder) is neither recorded nor shown
+        scratch = tmp_path / "scratch"
+        (scratch / "figures").mkdir(parents=True)
+        (scratch / "report.md").write_text("# A test's quick study\n")
+        record_report_dir(scratch)
+        assert "A test's quick study" not in c.get("/report").text
+        # the user's own run is
+        out = home / "mine"
         (out / "figures").mkdir(parents=True)
         (out / "report.md").write_text("# My study\n\n![fig](figures/a.png)\n")
         (out / "figures" / "a.png").write_bytes(b"png")
+        (out / "results.json").write_text(
+            '{"meta": {"command": "pelvic-walk experiments --out mine --quick", '
+            '"study": "quick", "date_utc": "2026-12-03 10:00 UTC"}}'
+        )
         record_report_dir(out)
         page = c.get("/report").text
         assert "My study" in page and 'src="/report/figures/a.png"' in page
+        assert "Your latest pelvic-walk experiments run" in page and str(out) in page
+        assert "quick study" in page and "2026-12-03 10:00 UTC" in page
         assert c.get("/report/figures/a.png").content == b"png"
 
 
@@ -399,13 +426,168 @@ def test_report_dir_option(live, tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
     (tmp_path / "report.md").write_text("# Chosen report\n")
     with TestClient(create_app(live, report_dir=tmp_path)) as c:
-        assert "Chosen report" in c.get("/report").text
-    args = build_parser().parse_args(["serve", "--report-dir", str(tmp_path)])
-    assert args.report_dir == tmp_path
+        page = c.get("/report").text
+        assert "Chosen report" in page
+        assert "The report chosen with serve --report" in page and "not known" in page
+    for flag in ("--report", "--report-dir"):
+        args = build_parser().parse_args(["serve", flag, str(tmp_path)])
+        assert args.report_dir == tmp_path
     monkeypatch.setenv("PELVIC_WALK_REPORT_DIR", str(tmp_path))
     assert Settings().report_dir == tmp_path
     with TestClient(create_app(live, report_dir=tmp_path / "none")) as c:
         assert "No report yet" in c.get("/report").text
+
+
+def test_tests_write_nothing_into_the_users_state():
+    """The session-wide fixture of tests/conftest.py points XDG_STATE_HOME at a folder of the
+    test session, so no test's `experiments` run lands in the user's ~/.local/state."""
+    from app.report_dir import state_file
+
+    home_state = Path.home() / ".local" / "state"
+    assert home_state not in state_file().parents
+    assert "pytest-of-" in str(state_file()) or "pytest" in str(state_file())
+
+
+# -- the instructor's token --------------------------------------------------------------------
+TOKEN = "class-token-7Qx"
+
+
+@pytest.fixture(scope="module")
+def taught(live):
+    from app.web.auth import Instructor
+
+    app = create_app(live, viser_port=18765, instructor=Instructor(TOKEN))
+    with TestClient(app) as c:
+        yield c
+    app.state.runs.shutdown()
+
+
+CHANGES = [  # every route that changes a session: (method, path, body)
+    ("put", "/api/params", {"walk": {"step_length": 0.25}}),
+    ("post", "/api/sim/pause", None),
+    ("post", "/api/sim/resume", None),
+    ("post", "/api/sim/reset", None),
+    ("post", "/api/sim/step", None),
+    ("put", "/api/sim/speed", {"speed": 1.0}),
+    ("post", "/api/sim/seek", {"t": 1.0}),
+    ("post", "/api/sim/push", {"method": "mpc", "force": [0, 20], "duration": 0.05}),
+]
+
+
+@pytest.mark.parametrize(("method", "path", "body"), CHANGES, ids=[c[1] for c in CHANGES])
+def test_with_an_instructor_only_the_token_changes_the_shared_session(
+    taught, live, method, path, body
+):
+    send = getattr(taught, method)
+    kw = {"json": body} if body is not None else {}
+    before = live.intent.version
+    r = send(path, **kw)
+    assert r.status_code == 401, r.text
+    assert "Authorization: Bearer" in r.json()["detail"] and r.headers["www-authenticate"]
+    r = send(path, headers={"Authorization": "Bearer not-the-token"}, **kw)
+    assert r.status_code == 403 and "wrong instructor token" in r.json()["detail"]
+    r = send(path.replace("/api/", "/api/sessions/shared/"), **kw)  # the same session
+    assert r.status_code == 401
+    assert send(path, headers={"Authorization": f"Basic {TOKEN}"}, **kw).status_code == 401
+    assert live.intent.version == before  # nothing was changed
+    r = send(path, headers={"Authorization": f"Bearer {TOKEN}"}, **kw)
+    assert r.status_code in (200, 409), r.text  # 409: a seek while running
+    taught.post("/api/sim/resume", headers={"Authorization": f"Bearer {TOKEN}"})
+
+
+def test_with_an_instructor_anyone_reads(taught):
+    for path in ("/api/state", "/api/params", "/api/horizon", "/api/sessions", "/api/health"):
+        assert taught.get(path).status_code == 200, path
+    assert taught.get("/api/health").json()["instructor"] is True
+    page = taught.get("/").text
+    assert "The <b>instructor</b> drives the shared demo" in page and TOKEN not in page
+    assert "That instructor token is wrong" in taught.get("/?token=guess").text
+
+
+def test_the_instructors_page_carries_the_token_to_the_scene(taught):
+    from urllib.parse import parse_qs, unquote, urlsplit
+
+    page = taught.get(f"/?token={TOKEN}").text
+    assert "you drive the shared demo" in page
+    src = page.split('<iframe id="scene" src="', 1)[1].split('"', 1)[0]
+    websocket = parse_qs(urlsplit(src.replace("&amp;", "&")).query)["websocket"][0]
+    assert websocket.startswith("ws://") and parse_qs(urlsplit(unquote(websocket)).query) == {
+        "token": [TOKEN]
+    }
+
+
+def test_the_token_is_compared_in_constant_time(monkeypatch):
+    import hmac
+
+    from app.web import auth
+
+    calls = []
+    compare = hmac.compare_digest
+
+    def spy(a, b):
+        calls.append((a, b))
+        return compare(a, b)
+
+    monkeypatch.setattr(auth.hmac, "compare_digest", spy)
+    teacher = auth.Instructor(TOKEN)
+    assert teacher.is_token(TOKEN) and not teacher.is_token("x") and not teacher.is_token(None)
+    assert len(calls) == 2 and all(isinstance(a, bytes) for a, _b in calls)
+    assert TOKEN not in repr(teacher)
+    assert not auth.Instructor(None).is_token(TOKEN)
+    with pytest.raises(ValueError):
+        auth.Instructor("  ")
+
+
+def test_private_sessions_need_no_token(live):
+    """The check guards the shared session only (a student drives their own robots)."""
+    from fastapi import HTTPException
+
+    from app.web.api.live import instructor_check
+    from app.web.auth import Instructor
+
+    check = instructor_check(Instructor(TOKEN), lambda: None)
+    assert check(("p1", live), None) == ("p1", live)
+    with pytest.raises(HTTPException) as exc:
+        check(("shared", live), None)
+    assert exc.value.status_code == 401
+
+
+def test_a_served_tool_never_logs_the_token(tmp_path):
+    """``serve`` with the token from the environment: requests carrying it in the URL and as a
+    bearer credential, right and wrong, and the token is in none of the tool's output."""
+    import httpx
+
+    from app.local_server import local_server
+
+    env = {**os.environ, "PELVIC_WALK_INSTRUCTOR_TOKEN": TOKEN, "PELVIC_WALK_DISPLAY_NICE": "0"}
+    with local_server(("--workers", "0"), env=env) as server:
+        base = server.base
+        assert httpx.get(f"{base}/?token={TOKEN}", timeout=30).status_code == 200
+        assert httpx.get(f"{base}/?token={TOKEN}x", timeout=30).status_code == 200
+        auth = {"Authorization": f"Bearer {TOKEN}"}
+        assert httpx.post(f"{base}/api/sim/pause", headers=auth, timeout=30).status_code == 200
+        bad = {"Authorization": f"Bearer {TOKEN}x"}
+        assert httpx.post(f"{base}/api/sim/resume", headers=bad, timeout=30).status_code == 403
+        assert httpx.get(f"{base}/api/nope?token={TOKEN}", timeout=30).status_code == 404
+        proc = server.proc
+    assert proc.poll() is not None
+    out = server.output(400)
+    assert "pelvic-walk: stopped" in out or "instructor" in out, out
+    assert TOKEN not in out, out
+
+
+def test_redaction_blanks_tokens_in_log_records():
+    import logging
+
+    from app.web.auth import RedactTokens, redact
+
+    assert redact(f"GET /?token={TOKEN}&x=1 HTTP/1.1") == "GET /?token=***&x=1 HTTP/1.1"
+    assert redact(f"Authorization: Bearer {TOKEN}") == "Authorization: Bearer ***"
+    record = logging.LogRecord(
+        "uvicorn.access", 20, "", 0, '%s "%s"', ("1.2.3.4", f"/?token={TOKEN}"), None
+    )
+    RedactTokens().filter(record)
+    assert TOKEN not in record.getMessage()
 
 
 # -- path traversal, with requests that keep their ".." -------------------------------------

@@ -1,4 +1,5 @@
-"""The live simulation thread: intent in, frames out, pacing, plan restarts and falls."""
+"""The live simulation thread: intent in, frames out, pacing, plan restarts and falls (a
+fallen robot lies marked for FALL_HOLD_S, then the session restarts every robot together)."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import threading
 import numpy as np
 import pytest
 
-from app.live import FALL_RESET_S, LiveSim, check_methods, live_params
+from app.live import FALL_HOLD_S, LiveSim, check_methods, live_params
 from app.live.history import ROW_COLUMNS
 from app.live.loop import PUBLISH_HZ, RTF_WINDOW_S, LiveLoop
 from app.live.session import CATCH_UP_S, initial_intent
@@ -222,41 +223,84 @@ def test_params_reach_every_walker_and_methods_rebuild(running):
     assert all(r.t < 0.5 for r in f.robots)  # restarted together
 
 
-def test_a_finished_plan_restarts(running):
+def test_a_finished_plan_restarts_every_robot_together(running):
     sim = running(params=short_params(1), methods=["fixed", "mpc"], speed=4.0)
     f = sim.frame()
-    while f is not None and any(r.walks_completed == 0 for r in f.robots):
+    while f is not None and not all(r.finished for r in f.robots):
         f = sim.wait_frame(f.seq, timeout=60)
-    assert f is not None
+    assert f is not None  # both stand at the end of their plan, and then
     finished = f.clock
-    while f is not None and any(r.waiting or r.t < 0.05 for r in f.robots):
+    while f is not None and any(r.finished or r.t < 0.05 for r in f.robots):
         f = sim.wait_frame(f.seq, timeout=60)
     assert f is not None
-    # both walk again together within one two-step cycle (not after the give-up wait)
-    cycle = 2 * f.robots[0].params.walk.step_time
-    assert f.clock - finished < cycle + 0.5, (finished, f.clock)
+    assert f.clock - finished < 1.0, (finished, f.clock)  # restarted at once, together
     for r in f.robots:
         assert r.walks_completed == 1 and r.last_walk_success is True and r.t < 0.5
-        assert np.all(np.isfinite(r.body_xpos))
-    assert abs(f.robots[0].t - f.robots[1].t) < 0.011
+        assert not r.waiting and np.all(np.isfinite(r.body_xpos))
+    assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
+    assert sim.intent.auto_restarts == 1
 
 
-def test_a_fallen_robot_is_reset_after_a_while(running):
-    sim = running(params=short_params(3), methods=["fixed", "mpc"], speed=4.0)
+def test_a_fallen_robot_lies_marked_until_every_robot_restarts_together(running):
+    sim = running(params=short_params(6), methods=["fixed", "mpc"], speed=4.0)
     _started(sim)
     sim.wait_applied(sim.pause())
     robot = sim.robots["fixed"]
     robot.session.fell = True  # as the world's fall check would mark it
     robot.session.fall_reason = "test: marked as fallen"
     f = sim.wait_applied(sim.step())
-    fixed = f.robots[0]
+    fixed, mpc = f.robots
     assert fixed.fell and fixed.falls == 1 and fixed.last_walk_success is False
-    assert not f.robots[1].fell
+    assert fixed.fell_clock == pytest.approx(f.clock - DT, abs=1e-9)  # marked at once
+    assert fixed.fall_reason == "test: marked as fallen"
+    assert not mpc.fell and mpc.fell_clock is None
+    fell_at, t_fixed = fixed.fell_clock, fixed.t
+    # paused, the hold does not run out: steps past FALL_HOLD_S of it leave the robot down
+    for _ in range(3):
+        f = sim.wait_applied(sim.step("liftoff"), timeout=30)
+    assert f.robots[0].fell and f.robots[0].t == t_fixed  # its controller stopped
     sim.resume()
-    while f is not None and f.robots[0].falls == 1 and f.robots[0].fell:
+    before = f
+    while f is not None and f.robots[0].fell:
+        before, f = f, sim.wait_frame(f.seq, timeout=30)
+    assert f is not None
+    assert before.clock >= fell_at + FALL_HOLD_S - 1e-9  # shown down for the whole hold
+    assert before.robots[1].t > FALL_HOLD_S  # while the other robot walked on
+    for r in f.robots:  # then all restarted at t = 0 together, the falls counted on
+        assert r.t < 0.05 and not r.fell and not r.waiting
+    assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
+    assert [r.falls for r in f.robots] == [1, 0]
+    assert sim.intent.auto_restarts == 1 and not f.restarted
+    assert sim.frames.span()[0] < fell_at  # the fall is still kept, to scrub back to
+
+
+def test_a_pushed_robot_falls_and_lies_where_it_fell(running):
+    """A real fall (300 N for 0.2 s topples the MPC robot): its body stays where it fell,
+    marked, while the fixed pelvis walks on; then both restart at t = 0 together."""
+    sim = running(params=live_params(), methods=["fixed", "mpc"], speed=4.0)
+    f = _started(sim)
+    while f.robots[1].step_index < 2:
         f = sim.wait_frame(f.seq, timeout=30)
-    assert f is not None and not f.robots[0].fell and f.robots[0].t < 0.5
-    assert f.robots[1].t > FALL_RESET_S  # the other robot walked on
+    sim.wait_applied(sim.push("mpc", (0.0, 300.0), 0.2), timeout=30)
+    while f is not None and not f.robots[1].fell:
+        f = sim.wait_frame(f.seq, timeout=30)
+    assert f is not None and f.robots[1].fell_clock is not None
+    assert "tilted" in f.robots[1].fall_reason or "pelvis" in f.robots[1].fall_reason
+    down: list = []
+    while f is not None and f.robots[1].fell:
+        down.append(f)
+        f = sim.wait_frame(f.seq, timeout=30)
+    assert f is not None
+    fell_at = down[0].robots[1].fell_clock
+    assert down[-1].clock >= fell_at + FALL_HOLD_S - 1e-9
+    late = [d for d in down if d.clock > fell_at + 1.5]  # on the floor by then
+    pelvis = np.array([d.robots[1].body_xpos[1] for d in late])
+    assert pelvis[:, 2].max() < 0.5  # lying
+    assert np.ptp(pelvis[:, :2], axis=0).max() < 0.05  # where it fell, not sliding about
+    assert down[-1].robots[0].t > down[0].robots[0].t + 2.0  # the fixed pelvis walked on
+    assert not down[-1].robots[0].fell
+    assert all(r.t < 0.05 and not r.fell for r in f.robots)
+    assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
 
 
 def test_history_has_one_column_set_per_method(running):
@@ -319,22 +363,28 @@ def test_step_to_the_next_liftoff_and_landing(running):
     assert r.in_dsp and min(abs(r.t - t) for t in plan.landing_times()) <= 2 * DT + 1e-9
 
 
-def test_a_robot_restarted_alone_rejoins_in_phase(running):
-    sim = running(params=short_params(6), methods=["fixed", "mpc"], speed=4.0)
-    _started(sim)
-    sim.wait_applied(sim.pause())
-    robot = sim.robots["fixed"]
-    robot.session.fell = True  # as the world's fall check would mark it
-    robot.session.fall_reason = "test: marked as fallen"
-    f = sim.wait_applied(sim.resume())
-    while f is not None and (f.robots[0].fell or f.robots[0].waiting or f.robots[0].t < 0.1):
-        f = sim.wait_frame(f.seq, timeout=30)
-    assert f is not None
-    fixed, mpc = f.robots
-    # in phase: both at the same point of the two-step cycle (the plans' step timing agrees)
-    cycle = 2 * mpc.params.walk.step_time
-    offset = (mpc.t - fixed.t) % cycle
-    assert min(offset, cycle - offset) < 0.011, (mpc.t, fixed.t)
+def test_robots_built_late_stand_by_and_start_in_phase():
+    """A loop that builds its robots after the session's start (a slow part of a session
+    split over processes) starts them in phase with the session's rhythm."""
+    wall = FakeWallClock()
+    wall.now = 100.0
+    params = short_params(6)
+    intent = dataclasses.replace(
+        initial_intent(params, ["fixed", "mpc"]), anchor=(100.0 - 1.7, 0.0), start_clock=0.0
+    )
+    frames: list = []
+    loop = LiveLoop(lambda: intent, frames.append, clock=wall.clock, sleep=wall.sleep)
+    loop.iterate()
+    assert all(r.waiting for r in frames[-1].robots)  # 1.7 s late: standing by
+    while frames[-1].robots[0].t < 0.1:
+        loop.iterate()
+    f = frames[-1]
+    cycle = 2 * params.walk.step_time
+    for r in f.robots:
+        # in phase with robots that started at start_clock: the same point of the cycle
+        offset = (f.clock - intent.start_clock - r.t) % cycle
+        assert min(offset, cycle - offset) < 0.011, (f.clock, r.t)
+    assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
 
 
 def test_the_time_base_moves_only_for_a_loop_that_ran_late():

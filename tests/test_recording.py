@@ -148,7 +148,7 @@ def test_zip_and_html(client, live):
     _still_running(live)
 
 
-def test_the_record_folder_offers_the_zip(live):
+def test_the_record_folder_downloads_the_zip(live):
     import viser
 
     server = viser.ViserServer(host="127.0.0.1", port=0, verbose=False)
@@ -160,9 +160,13 @@ def test_the_record_folder_offers_the_zip(live):
         folder = RecordFolder(server.gui, SimpleNamespace(session=live, view=view))
         folder.seconds.value = 1000.0  # beyond what is kept (40 s max; the slider clamps)
         sent = []
-        data = folder.record(SimpleNamespace(send_file_download=lambda *a: sent.append(a)))
+        data = folder.record(
+            SimpleNamespace(send_file_download=lambda *a, **kw: sent.append((a, kw)))
+        )
         assert data is not None and data.startswith(b"PK")
-        assert sent and sent[0][0].endswith(".zip") and sent[0][1] == data
+        (name, payload), kw = sent[0]
+        assert name.endswith(".zip") and payload == data
+        assert kw == {"save_immediately": True}  # a file download, not a link in a toast
         assert "Recorded" in folder.result.content and "were kept" in folder.result.content
         assert not folder.button.disabled
     finally:

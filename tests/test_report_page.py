@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from pathlib import Path
 
 from app.report_dir import (
     latest_report_dir,
@@ -67,8 +68,17 @@ def test_no_report_yet(tmp_path):
     assert "No report yet" in render_report_page(tmp_path / "missing")
 
 
+def _users_own(monkeypatch, home: Path) -> None:
+    """Folders under ``home`` count as the user's own here (tmp_path is a temporary folder,
+    whose reports are neither recorded nor shown)."""
+    import app.report_dir
+
+    monkeypatch.setattr(app.report_dir, "is_temporary", lambda p: home not in Path(p).parents)
+
+
 def test_the_latest_written_report_is_remembered(tmp_path, monkeypatch):
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
+    _users_own(monkeypatch, tmp_path)
     assert state_file() == tmp_path / "state" / "pelvic-walk" / "report-dirs"
     assert latest_report_dir() == reference_report_dir()
     older, newer = tmp_path / "older", tmp_path / "newer"
@@ -88,6 +98,28 @@ def test_the_latest_written_report_is_remembered(tmp_path, monkeypatch):
 def test_an_unwritable_state_dir_is_only_a_warning(tmp_path, monkeypatch, capsys):
     (tmp_path / "file").write_text("")
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "file"))  # a file, not a directory
-    record_report_dir(tmp_path)
+    _users_own(monkeypatch, tmp_path)
+    (tmp_path / "mine").mkdir()
+    record_report_dir(tmp_path / "mine")
     assert "warning" in capsys.readouterr().err
     assert latest_report_dir() == reference_report_dir()
+
+
+def test_reports_in_temporary_folders_are_neither_recorded_nor_shown(tmp_path, monkeypatch):
+    """A test's `experiments` run (pytest's or the system's temporary folder) never becomes
+    what /report shows."""
+    import tempfile
+
+    from app.report_dir import choose_report, is_temporary
+
+    monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
+    assert is_temporary(tmp_path) and is_temporary(Path(tempfile.gettempdir()) / "x")
+    assert not is_temporary(Path.home() / "study") and not is_temporary(reference_report_dir())
+    (tmp_path / "report.md").write_text("# quick\n")
+    record_report_dir(tmp_path)
+    assert not state_file().exists()
+    state_file().parent.mkdir(parents=True)
+    state_file().write_text(f"{tmp_path}\n")  # recorded by an older version
+    choice = choose_report()
+    assert choice.path == reference_report_dir() and choice.kind == "reference"
+    assert choice.about.startswith("The reference report shipped with pelvic-walk: made by")

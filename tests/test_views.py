@@ -92,3 +92,200 @@ def test_elsewhere_labels_float_over_the_heads_at_different_heights(n):
     assert all(p[2] > 1.95 for p in points)  # above the head (the robot is ~1.9 m tall)
     assert len({round(float(p[2]), 3) for p in points}) == n
     assert all(p[0] == pytest.approx(0.3) for p in points)
+
+
+# -- a robot lying behind the others, and one account of the playback -------------------------
+@pytest.mark.parametrize("name", list(CAMERA_VIEWS))
+@pytest.mark.parametrize("n", [2, 3])
+@pytest.mark.parametrize("stagger", [0.5, 1.0, 2.0])
+def test_a_view_fitted_for_a_stagger_shows_robots_that_far_apart(name, n, stagger):
+    """One robot lying where it fell, the others walked on: the scene centres between the
+    hindmost and the foremost, and the view fitted for that stagger shows them all whole."""
+    along_x = name == "side"
+    pos, look, up, fov = camera_pose(name, n, 1.3, along_x, stagger)
+    px = _project(pos, look, up, fov, 1.3)
+    for i in range(n):
+        ahead = stagger / 2 if i % 2 else -stagger / 2
+        off = slot_offset(i, n)
+        x, y = (off + ahead, 0.0) if along_x else (ahead, off)
+        for dx in (-0.5, 0.5):
+            for dy in (-0.3, 0.3):
+                for z in (0.0, 2.2):
+                    assert px((x + dx, y + dy, z)), (name, n, stagger, i)
+
+
+def _project(pos, look, up, fov, aspect):
+    """A function telling whether a world point is inside the view."""
+    forward = (look - pos) / np.linalg.norm(look - pos)
+    right = np.cross(forward, up)
+    right /= np.linalg.norm(right)
+    cam_up = np.cross(right, forward)
+    tan_v, tan_h = math.tan(fov / 2), math.tan(fov / 2) * aspect
+
+    def inside(p) -> bool:
+        d = np.asarray(p, float) - pos
+        depth = d @ forward
+        return bool(
+            depth > 0
+            and abs(d @ right) / depth <= tan_h + 1e-9
+            and abs(d @ cam_up) / depth <= tan_v + 1e-9
+        )
+
+    return inside
+
+
+@pytest.fixture(scope="module")
+def two_robots():
+    """Frames of a real loop (fixed, mpc): one walking, one marked fallen 1 s later."""
+    import dataclasses
+
+    from app.live.loop import LiveLoop
+    from app.live.session import initial_intent
+    from controller.params import ControllerParams
+
+    intent = dataclasses.replace(
+        initial_intent(ControllerParams().replace(walk={"n_steps": 6}), ["fixed", "mpc"]),
+        anchor=(0.0, 0.0),
+    )
+    frames: list = []
+    wall = [0.0]
+
+    def sleep(s: float) -> None:
+        wall[0] += s
+
+    loop = LiveLoop(lambda: intent, frames.append, clock=lambda: wall[0], sleep=sleep)
+    while not frames or frames[-1].clock < 1.5:
+        loop.iterate()
+    loop.robots["fixed"].session.fell = True
+    loop.robots["fixed"].session.fall_reason = "torso tilted over 30 deg"
+    while frames[-1].clock < 2.5:
+        loop.iterate()
+    return frames
+
+
+def test_a_fallen_robot_is_marked_and_the_view_centres_between_the_robots(two_robots):
+    from app.live import FALL_HOLD_S
+    from app.web.scene import follow_x, label_text, stagger_x
+
+    f = two_robots[-1]
+    fixed, mpc = f.robots
+    assert fixed.fell and fixed.fell_clock is not None and not mpc.fell
+    text = label_text(fixed, f)
+    left = fixed.fell_clock + FALL_HOLD_S - f.clock
+    assert f"FELL at t = {fixed.fell_clock:.1f} s" in text and "tilted over 30°" in text
+    assert f"restart in {left:.1f} s" in text
+    paused = dataclasses_replace(f, paused=True, clock=fixed.fell_clock + FALL_HOLD_S + 1)
+    assert "restart when you resume" in label_text(fixed, paused)
+    assert "FELL" not in label_text(mpc, f) and "step" in label_text(mpc, f)
+    # the view's middle lies between the fallen robot and the walking one
+    lying = (fixed.body_xpos[1:, 0].min() + fixed.body_xpos[1:, 0].max()) / 2
+    assert follow_x(f.robots) == pytest.approx((lying + mpc.com[0]) / 2)
+    assert stagger_x(f.robots) in (0.0, 0.5, 1.0)
+    assert stagger_x(two_robots[0].robots) == 0.0  # abreast
+
+
+def dataclasses_replace(obj, **kw):
+    import dataclasses
+
+    return dataclasses.replace(obj, **kw)
+
+
+@pytest.fixture(scope="module")
+def panel_view():
+    """A live session, its API and the panel of a viser view on it (no browser)."""
+    import viser
+    from fastapi.testclient import TestClient
+
+    from app.live import LiveSim
+    from app.live.registry import SessionRegistry
+    from app.local_server import free_port
+    from app.web.api import create_app
+    from app.web.view import View
+    from controller.params import ControllerParams
+
+    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 20}), methods=["fixed", "mpc"])
+    sim.start()
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    registry = SessionRegistry.around(sim)
+    view = View(server, sim, registry)
+    app = create_app(registry)
+    with TestClient(app) as client:
+        yield sim, view, client
+    app.state.runs.shutdown()
+    server.stop()
+    sim.stop()
+
+
+def test_the_panel_the_state_and_the_sessions_list_agree_after_every_transition(panel_view):
+    """Paused, speed, the instant shown and the timeline's range: one account in the panel,
+    GET /api/state and GET /api/sessions, after pause, seek, step, seek + resume, restart
+    and a new speed (the seek while paused read "Running at 1x" and "paused": false)."""
+    import time
+
+    sim, view, client = panel_view
+    clock = [time.monotonic()]
+
+    def read():
+        clock[0] += 10.0  # the panel refreshes its status at most STATUS_HZ a second
+        view.draw(clock[0])
+        state = client.get("/api/state").json()
+        listed = client.get("/api/sessions").json()["sessions"][0]
+        panel = view.panel
+        status = panel.status.content.splitlines()[0]
+        return state, listed, panel, status
+
+    def agree(paused: bool, sought: bool):
+        state, listed, panel, status = read()
+        playback = sim.playback()
+        assert state["paused"] is listed["paused"] is playback.paused is paused
+        assert state["speed"] == listed["speed"] == playback.speed
+        assert panel.pause_button.label == ("Resume" if paused else "Pause")
+        assert status.startswith("Paused" if paused else "Running"), status
+        assert (state["shown_t"] is not None) is sought
+        if paused:  # nothing moves: the three read the same instant and range
+            assert state["shown_t"] == listed["shown_t"]
+            assert state["clock"] == pytest.approx(listed["clock"])
+            assert f"t = {state['clock']:.2f} s" in status
+            assert panel.timeline.min == pytest.approx(state["kept"]["start"], abs=1e-3)
+            assert panel.timeline.max == pytest.approx(state["kept"]["end"], abs=0.011)
+            assert panel.timeline.value == pytest.approx(state["clock"], abs=1e-3)
+            assert panel.timeline.disabled is False
+        else:
+            assert listed["shown_t"] is None and panel.timeline.disabled is True
+        return state
+
+    f = sim.wait_frame(timeout=30)
+    while f.clock < 3.0:
+        f = sim.wait_frame(f.seq, timeout=30)
+    agree(False, False)
+    assert client.post("/api/sim/pause").json()["applied"]
+    state = agree(True, False)
+    target = (state["kept"]["start"] + state["kept"]["end"]) / 2
+    assert client.post("/api/sim/seek", json={"t": target}).status_code == 200
+    state = agree(True, True)
+    assert state["shown_t"] == pytest.approx(target, abs=0.1)
+    assert "replaying" in read()[3]
+    assert client.post("/api/sim/step").json()["applied"]  # back to the present, one tick on
+    state = agree(True, False)
+    assert state["clock"] == pytest.approx(state["kept"]["end"])
+    client.post("/api/sim/seek", json={"t": target})
+    assert client.post("/api/sim/resume").json()["applied"]
+    state = agree(False, False)
+    # running, the timeline spans what is kept now, not the range it had when paused
+    f = sim.wait_frame(sim.frame().seq, timeout=30)
+    while f.clock < state["kept"]["end"] + 1.0:
+        f = sim.wait_frame(f.seq, timeout=30)
+    _state, _listed, panel, _status = read()
+    kept = sim.playback().kept
+    assert panel.timeline.max == pytest.approx(kept[1], abs=0.2)
+    assert panel.timeline.value == pytest.approx(panel.timeline.max)
+    assert client.post("/api/sim/reset").json()["applied"]
+    agree(False, False)
+    assert client.post("/api/sim/pause").json()["applied"]
+    assert client.post("/api/sim/reset").json()["applied"]  # a restart while paused stays paused
+    agree(True, False)
+    client.post("/api/sim/resume")
+    assert client.put("/api/sim/speed", json={"speed": 2.0}).json()["applied"]
+    assert agree(False, False)["speed"] == 2.0
+    assert "Running at 2x" in read()[3]
+    client.put("/api/sim/speed", json={"speed": 1.0})

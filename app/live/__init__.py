@@ -9,11 +9,11 @@
 
 from app.live.frames import Horizon, LiveFrame, RobotFrame
 from app.live.intent import SPEED_MAX, SPEED_MIN, Intent, check_methods
-from app.live.loop import FALL_RESET_S, LIVE_STEPS, live_params
-from app.live.session import LiveSim
+from app.live.loop import LIVE_STEPS, live_params
+from app.live.session import FALL_HOLD_S, LiveSim, Playback
 
 __all__ = [
-    "FALL_RESET_S",
+    "FALL_HOLD_S",
     "LIVE_STEPS",
     "SPEED_MAX",
     "SPEED_MIN",
@@ -21,6 +21,7 @@ __all__ = [
     "Intent",
     "LiveFrame",
     "LiveSim",
+    "Playback",
     "RobotFrame",
     "check_methods",
     "live_params",

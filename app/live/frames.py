@@ -55,6 +55,9 @@ class RobotFrame:
     step_length: float  # [m] length of the step in progress (the one in force)
     fell: bool
     fall_reason: str | None
+    fell_clock: float | None  # [s] session clock of the fall: it is shown down from then
+    # until the session restarts every robot (FALL_HOLD_S later, app.live.session)
+    finished: bool  # walked its whole plan and stands (the session then restarts them all)
     walks_completed: int  # plans finished since the live session (re)started
     falls: int
     last_walk_success: bool | None  # outcome of the last finished or failed walk
@@ -175,6 +178,7 @@ def robot_frame(
     last_success: bool | None,
     waiting: bool,
     error: str | None,
+    fell_clock: float | None = None,
 ) -> RobotFrame:
     """A frame of one robot from its session (called by the loop, at the display rate)."""
     world, out, m = session.world, session.last, session.measured
@@ -192,6 +196,8 @@ def robot_frame(
         step_length=plan.step_length(step_index),
         fell=session.fell or error is not None,
         fall_reason=error or session.fall_reason,
+        fell_clock=fell_clock,
+        finished=bool(session.walker.finished and not session.fell and error is None),
         walks_completed=walks,
         falls=falls,
         last_walk_success=last_success,

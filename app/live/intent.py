@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from controller.params import METHODS, ControllerParams
 
-DEFAULT_METHODS: tuple[str, ...] = ("fixed", "mpc")
+DEFAULT_METHODS: tuple[str, ...] = ("fixed", "redundancy", "mpc")  # the three compared
 SPEED_MIN, SPEED_MAX = 0.1, 4.0  # playback speed range (x real time)
 STEP_UNTIL = ("tick", "liftoff", "landing")  # what a single step advances to
 PUSH_FORCE_MAX = 300.0  # [N] largest horizontal push (about 0.6 body weights)
@@ -44,7 +44,10 @@ class Intent:
     speed: float = 1.0  # x real time
     step_requests: int = 0  # single steps asked for so far (monotonic)
     step_until: str = "tick"  # what the latest single step advances to (STEP_UNTIL)
-    reset_requests: int = 0  # resets asked for so far (monotonic)
+    reset_requests: int = 0  # resets asked for so far (monotonic), the automatic ones included
+    # of which the session made itself (after a fall was shown, or at the end of the plans):
+    # they keep the plots and the kept frames, so a fall can be scrubbed back to
+    auto_restarts: int = 0
     pushes: tuple[Push, ...] = ()  # the latest push requests, oldest first
     # The session's time base, shared by every loop running part of it (they may sit in
     # different worker processes): session clock ``anchor[1]`` [s] at monotonic wall time

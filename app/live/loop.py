@@ -32,12 +32,15 @@ Time base: the intent carries the session's anchor (a session clock at a monoton
 time, and the speed), so loops running parts of one session in different processes keep the
 same clock: each one sleeps while ahead of it and runs flat out while behind.
 
-Live choices: plans are long (``LIVE_STEPS``); a robot whose plan ends starts again; a robot
-that falls is shown fallen for ``FALL_RESET_S`` of simulated time, then restarts. A robot
-that restarts alone stands by until it is in phase again (a left step about to start
-``t_start`` later) with the other robots, or with its own previous plan, which the others
-follow too; a reset or a change of methods rebuilds all robots, which start walking together
-at the intent's ``start_clock``.
+Live choices: plans are long (``LIVE_STEPS``). A robot that falls stops its controller and
+lies where it fell (its servos hold the last targets while the physics runs on), marked in
+its frames (``fell_clock``); a robot whose plan ends stands still the same way. The loop
+never restarts a robot alone: the session restarts all of its robots together
+(:meth:`app.live.session.SessionView.receive`, ``FALL_HOLD_S`` after a fall, or once every
+robot finished), so side-by-side robots always compare the same instants. A reset or a
+change of methods rebuilds all robots, which start walking together at the intent's
+``start_clock``; a loop that builds its robots too late for it (a slow part of a session
+split over processes) has them stand by until they are in phase with the session's rhythm.
 """
 
 from __future__ import annotations
@@ -61,8 +64,7 @@ from controller.params import ControllerParams
 
 log = logging.getLogger(__name__)
 
-LIVE_STEPS = 200  # steps per live plan; the robot restarts when it ends
-FALL_RESET_S = 2.0  # [s] of simulated time a fallen robot stays down before it restarts
+LIVE_STEPS = 200  # steps per live plan; the session restarts its robots when they end
 RTF_WINDOW_S = 3.0  # [s] of wall time over which the real-time factor is measured
 PUBLISH_HZ = 30.0  # frames per second of wall time while running (the display rate)
 STEP_UNTIL_MAX_S = 3.0  # [s] a "next lift-off / landing" step gives up after this
@@ -79,14 +81,15 @@ class _Robot:
 
     method: str
     session: Session
-    falls: int = 0
+    falls: int = 0  # since the session opened (kept when the robots are rebuilt)
     walks_completed: int = 0
     last_walk_success: bool | None = None
-    error: str | None = None  # the controller raised: shown down, then restarted
-    fell_at: float | None = None  # the robot's time of its fall
+    error: str | None = None  # the controller raised: shown down like a fall
+    fell_clock: float | None = None  # session clock of its fall (or error)
+    finished_clock: float | None = None  # session clock at which its plan ended
     waiting_since: float | None = None  # session clock when it began standing by
-    ref: tuple[FootstepPlan, float] | None = None  # its previous plan, and the session clock
-    # at which that plan's time was 0: where the other robots' steps are, after a restart
+    ref: tuple[FootstepPlan, float] | None = None  # the plan to keep in phase with, and the
+    # session clock at which that plan's time was 0 (a robot built late)
     _energy_key: int = -1
     _energy: float = math.nan
 
@@ -97,6 +100,11 @@ class _Robot:
     @property
     def waiting(self) -> bool:
         return self.waiting_since is not None
+
+    @property
+    def held(self) -> bool:
+        """Down after a fall, or standing at the end of its plan: no controller runs."""
+        return self.fell_clock is not None or self.finished_clock is not None
 
     def two_step_energy(self) -> float:
         """The last completed two-step window's energy [J] (the quantity of Table 1)."""
@@ -165,6 +173,7 @@ class LiveLoop:
         self.pushes_done = 0
         self.seq = 0
         self._resets_done = 0
+        self._user_resets = 0
         self._ticks = 0
         self._busy = 0.0
         self._rates = _Rates()
@@ -225,16 +234,28 @@ class LiveLoop:
             or intent.methods != old.methods
             or (intent.reset_requests != self._resets_done)
         ):
+            user_reset = (intent.reset_requests - intent.auto_restarts) != self._user_resets
+            before = self.robots
             self.robots = {m: self._robot(m, intent.params) for m in intent.methods}
+            for m, robot in self.robots.items():  # the counts of the session go on
+                if m in before:
+                    old_robot = before[m]
+                    robot.falls, robot.walks_completed = old_robot.falls, old_robot.walks_completed
+                    robot.last_walk_success = old_robot.last_walk_success
             self._resets_done = intent.reset_requests
+            self._user_resets = intent.reset_requests - intent.auto_restarts
             late = self.clock > intent.start_clock + intent.params.control_dt / 2
             for robot in self.robots.values():
                 # The robots of every loop of the session start at start_clock; one built too
                 # late for it (a slow part) joins them in phase instead.
                 robot.ref = (robot.session.plan, intent.start_clock)
                 robot.waiting_since = self.clock if late else None
-            self._rows = {}
-            self._restarted = True
+            # plots and kept frames start anew for other robots or a restart asked for; a
+            # restart the session made itself (after a fall) keeps them: the fall can be
+            # scrubbed back to and its plot rows stay
+            if old is None or intent.methods != old.methods or user_reset:
+                self._rows = {}
+                self._restarted = True
         elif intent.params != old.params:
             for robot in self.robots.values():
                 robot.session.walker.set_params(
@@ -277,6 +298,9 @@ class LiveLoop:
         """Advance to the next tick, lift-off or landing of the first walking robot."""
         n_max = int(STEP_UNTIL_MAX_S / intent.params.control_dt)
         ref = self._reference()
+        if ref is None and all(r.held for r in self.robots.values()):
+            self._tick_all(intent)  # every robot is down or done: one period of physics
+            return
         if ref is None or ref.session.last is None:
             # Nobody walks yet: through the start delay (or a wait to start in phase) the
             # robots stand still, and a step that shows nothing would puzzle a student. Tick
@@ -322,41 +346,39 @@ class LiveLoop:
         if robot.waiting:
             self._start_if_in_phase(robot)
             return
-        if robot.fell:
-            if robot.fell_at is None:
-                robot.fell_at = s.t
+        if not robot.held:
+            if robot.fell:
+                robot.fell_clock = self.clock
                 robot.falls += 1
                 robot.last_walk_success = False
-            if s.t - robot.fell_at >= FALL_RESET_S:
-                self._restart(robot, params)
-                return
-        elif s.walker.finished:
-            robot.walks_completed += 1
-            robot.last_walk_success = True
-            self._restart(robot, params)
-            return
-        if robot.error is not None:  # shown down while the time runs, then restarted
-            s.walker.t += s.params.control_dt
+            elif s.walker.finished:
+                robot.finished_clock = self.clock
+                robot.walks_completed += 1
+                robot.last_walk_success = True
+        if robot.held:
+            self._hold(robot)
             return
         try:
             s.tick()
         except Exception as exc:  # noqa: BLE001 - one robot's failure must not stop the loop
             log.exception("robot %s: controller tick failed", robot.method)
             robot.error = f"{type(exc).__name__}: {exc}"
+        if robot.fell:  # marked at once: a frame never shows a fall without its time
+            robot.fell_clock = self.clock + params.control_dt
+            robot.falls += 1
+            robot.last_walk_success = False
 
-    def _restart(self, robot: _Robot, params: ControllerParams) -> None:
-        """A fresh session that stands by until it can start in phase with the others."""
-        old = robot.session
-        robot.ref = (old.plan, self.clock - old.t)
-        fresh = self._robot(robot.method, params)
-        robot.session, robot.error, robot.fell_at = fresh.session, None, None
-        robot.waiting_since = self.clock
-        robot._energy_key = -1
-        self._start_if_in_phase(robot)
+    @staticmethod
+    def _hold(robot: _Robot) -> None:
+        """One control period of physics with the servos holding the last targets: a fallen
+        robot lies where it fell, a finished one stands (until the session restarts them)."""
+        s = robot.session
+        target = s.last.q_target if s.last is not None else s.world.q_joints()
+        s.world.step(target)
 
     def _reference(self) -> _Robot | None:
-        """The first robot that walks (not fallen, not standing by)."""
-        return next((r for r in self.robots.values() if not r.fell and not r.waiting), None)
+        """The first robot that walks (not held, not standing by)."""
+        return next((r for r in self.robots.values() if not r.held and not r.waiting), None)
 
     def _start_if_in_phase(self, robot: _Robot) -> None:
         """Start a waiting robot when the reference is where a fresh plan would be at t = 0.
@@ -444,6 +466,7 @@ class LiveLoop:
                     r.last_walk_success,
                     r.waiting,
                     r.error,
+                    r.fell_clock,
                 )
                 for slot, r in enumerate(self.robots.values())
             ),

@@ -4,9 +4,11 @@ Modes (``pelvic-walk serve --sessions shared|private``):
 - ``shared`` (the default, a lecture demo): one session that every browser watches and
   changes;
 - ``private``: each browser gets its own session (robots, parameters, plots, playback) while
-  a worker has room; beyond that a browser is told so and watches the shared demo, which
-  always runs. A private session ends when its browser disconnects, or after ``idle_s``
-  without a browser or an API call (sessions opened through the API).
+  a worker has room; beyond that a browser is told so and watches the shared demo. A private
+  session ends when its browser disconnects, or after ``idle_s`` without a browser or an API
+  call (sessions opened through the API). The shared demo runs too, holding its robots'
+  worker slots, unless the server is started without it (``serve --no-shared-demo``): then
+  every slot is for private sessions and there is no shared session to watch.
 
 Sessions run in worker processes (:class:`~app.live.pool.WorkerPool`) or, with no pool, the
 shared one in a thread of this process (:class:`~app.live.session.LiveSim`).
@@ -35,6 +37,12 @@ class SessionsDisabled(RuntimeError):
     """Private sessions asked for while the server runs in shared mode."""
 
 
+NO_SHARED = (
+    "this server runs no shared demo (serve --no-shared-demo): open a private session with "
+    "POST /api/sessions and address it as /api/sessions/{id}/..."
+)
+
+
 @dataclass
 class _Entry:
     session: SessionView
@@ -48,33 +56,52 @@ class SessionRegistry:
     def __init__(
         self,
         mode: str,
-        shared: SessionView,
+        shared: SessionView | None,
         pool: WorkerPool | None = None,
         idle_s: float = 300.0,
         intent: Intent | None = None,
+        initial: Intent | None = None,
     ):
+        """``shared`` is the shared demo, or None (private mode only) for none; ``initial``
+        (or else ``intent``, or the shared demo's) is a private session's first intent."""
         if mode not in MODES:
             raise ValueError(f"sessions mode must be one of {', '.join(MODES)}, got {mode!r}")
         if mode == "private" and pool is None:
             raise ValueError("private sessions need worker processes (--workers >= 1)")
+        if shared is None and mode != "private":
+            raise ValueError("only private mode runs without a shared demo")
+        first = initial or intent or (shared.intent if shared is not None else None)
+        if first is None:
+            raise ValueError("give the first intent of a private session")
         self.mode = mode
         self.pool = pool
         self.idle_s = idle_s
-        self._initial = intent or shared.intent  # a private session's first intent
+        self._initial = first  # a private session's first intent
         self._lock = threading.Lock()
         self._ids = itertools.count(1)
-        self._entries: dict[str, _Entry] = {SHARED: _Entry(shared, None, time.monotonic())}
+        self._entries: dict[str, _Entry] = {}
+        if shared is not None:
+            self._entries[SHARED] = _Entry(shared, None, time.monotonic())
         self._stop = threading.Event()
         self._reaper = threading.Thread(target=self._reap, name="session-reaper", daemon=True)
         self._reaper.start()
 
     @classmethod
     def start(
-        cls, mode: str, intent: Intent, pool: WorkerPool | None = None, idle_s: float = 300.0
+        cls,
+        mode: str,
+        intent: Intent,
+        pool: WorkerPool | None = None,
+        idle_s: float = 300.0,
+        shared_demo: bool = True,
     ) -> SessionRegistry:
-        """Start the shared session (in a worker, or a thread without a pool) and the registry."""
-        if pool is None:
-            shared: SessionView = LiveSim(intent.params, intent.methods, intent.speed).start()
+        """Start the shared session (in a worker, or a thread without a pool; none when
+        ``shared_demo`` is False, private mode only) and the registry."""
+        shared: SessionView | None
+        if not shared_demo:
+            shared = None
+        elif pool is None:
+            shared = LiveSim(intent.params, intent.methods, intent.speed).start()
         else:
             shared = pool.open(intent, sid=SHARED)
         return cls(mode, shared, pool, idle_s, intent)
@@ -85,8 +112,17 @@ class SessionRegistry:
         return cls("shared", session)
 
     @property
+    def has_shared(self) -> bool:
+        """Whether a shared demo runs (always, but with ``serve --no-shared-demo``)."""
+        return SHARED in self._entries
+
+    @property
     def shared(self) -> SessionView:
-        return self._entries[SHARED].session
+        """The shared demo; NoSuchSession when the server runs none."""
+        entry = self._entries.get(SHARED)
+        if entry is None:
+            raise NoSuchSession(NO_SHARED)
+        return entry.session
 
     def get(self, sid: str | None) -> SessionView:
         """The session with this id (the shared one for None); NoSuchSession otherwise."""
@@ -131,7 +167,7 @@ class SessionRegistry:
             entries = list(self._entries.items())
         out = []
         for sid, e in entries:
-            frame = e.session.frame()
+            playback = e.session.playback()  # the same account as GET /api/state's
             out.append(
                 {
                     "id": sid,
@@ -139,8 +175,11 @@ class SessionRegistry:
                     "owner": e.owner,
                     "worker_pids": getattr(e.session, "worker_pids", []),
                     "methods": list(e.session.intent.methods),
-                    "realtime_factor": frame.realtime_factor if frame else None,
-                    "paused": e.session.intent.paused,
+                    "realtime_factor": playback.realtime_factor,
+                    "paused": playback.paused,
+                    "speed": playback.speed,
+                    "clock": playback.clock,
+                    "shown_t": playback.shown_t,
                     "idle_s": round(time.monotonic() - e.last_used, 1),
                 }
             )
@@ -148,7 +187,7 @@ class SessionRegistry:
 
     def count_private(self) -> int:
         with self._lock:
-            return len(self._entries) - 1
+            return len([sid for sid in self._entries if sid != SHARED])
 
     @property
     def capacity_private(self) -> int:
@@ -176,9 +215,9 @@ class SessionRegistry:
             sids = [s for s in self._entries if s != SHARED]
         for sid in sids:
             self.close(sid)
-        shared = self.shared
-        if not stop_shared:
+        if not stop_shared or not self.has_shared:
             return
+        shared = self.shared
         if isinstance(shared, LiveSim):
             shared.stop()
         elif self.pool is not None:

@@ -10,7 +10,14 @@ it has carried out).
 
 While paused, :meth:`LiveSim.seek` shows a kept instant: :meth:`LiveSim.shown_frame` is then
 the kept frame nearest to it (scene, horizon inspector, plot cursor); resuming returns to the
-present.
+present. :meth:`SessionView.playback` is the one account of the playback state (paused, speed,
+the instant shown, the timeline's range) that the panel, ``GET /api/state`` and
+``GET /api/sessions`` all read.
+
+Failures that teach: a robot that falls lies where it fell, marked, for ``FALL_HOLD_S`` of
+session time (longer while paused: the hold ends only while running), and then the session
+restarts all of its robots together (:meth:`SessionView.receive`); so does the end of the
+plans. The loops never restart a robot alone.
 """
 
 from __future__ import annotations
@@ -21,6 +28,7 @@ import math
 import threading
 import time
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 from app.live.frames import LiveFrame
 from app.live.history import FrameStore, PlotHistory
@@ -41,6 +49,38 @@ from controller.params import ControllerParams
 log = logging.getLogger(__name__)
 KEEP_S = 40.0  # [s] of frames kept for scrubbing and recording (at least 30 s)
 PLOT_HISTORY_S = 60.0  # [s] of plot rows kept
+# [s] of session time a fallen robot lies where it fell, marked, before the session restarts
+# every robot together. The fall is detected at 30 deg of torso tilt; the body reaches the
+# floor about a second later; the rest is time to read the marker ("fell at t = ...") and see
+# the other robots walk on (two to three steps at 1.2 s). Longer, and a lesson whose robot
+# falls every few seconds (0.42 m) would be mostly waiting.
+FALL_HOLD_S = 4.0
+
+
+@dataclass(frozen=True)
+class Playback:
+    """The playback state of a session, read in one place (:meth:`SessionView.playback`)."""
+
+    paused: bool  # as asked (the loop applies it within a frame)
+    speed: float  # [x real time]
+    clock: float | None  # [s] session clock of the instant shown (None before any frame)
+    shown_t: float | None  # [s] the sought instant while paused, None when showing the present
+    present: float | None  # [s] session clock of the newest frame
+    kept: tuple[float, float] | None  # [s] oldest and newest kept instant: the timeline's range
+    realtime_factor: float | None  # simulated / wall time lately (None while paused)
+    compute_realtime_factor: float | None
+
+    def describe(self) -> str:
+        """One line for people: "Paused at t = 12.30 s (of 20.00 s kept)", "Running at 1x"."""
+        if self.paused:
+            at = f" at t = {self.clock:.2f} s" if self.clock is not None else ""
+            if self.shown_t is not None and self.present is not None:
+                at += f" (replaying; the present is {self.present:.2f} s)"
+            return f"Paused{at}"
+        rtf = self.realtime_factor
+        return f"Running at {self.speed:g}x, real-time factor " + (
+            f"{rtf:.2f}" if rtf is not None else "-"
+        )
 
 
 def initial_intent(
@@ -81,9 +121,15 @@ class SessionView:
         start_delay: float = 0.0,
     ):
         self._wall = wall  # the monotonic wall clock of the time base (shared by processes)
-        self.start_delay = start_delay  # [s] robots (re)built start this much later, so that
-        # loops in other processes, which take a moment to build theirs, start with them
-        intent = dataclasses.replace(intent, anchor=(wall(), 0.0), start_clock=start_delay)
+        self.start_delay = (
+            start_delay  # [s of wall time] robots (re)built start this much later, so that
+        )
+        # loops in other processes, which take a moment to build theirs, start with them, and
+        # a loop a frame ahead of the time base is not already past the start
+        self._auto_version = -1  # the intent of the last restart the session made itself
+        intent = dataclasses.replace(
+            intent, anchor=(wall(), 0.0), start_clock=start_delay * intent.speed
+        )
         self._box = IntentBox(intent, on_change=self._intent_changed)
         self._last_catch_up = -math.inf
         self._changed = threading.Condition()  # notified when a frame arrives
@@ -149,7 +195,7 @@ class SessionView:
 
     def _restart_at(self, cur: Intent) -> dict:
         """Fields that rebuild every robot, to start together ``start_delay`` from now."""
-        delay = 0.0 if cur.paused else self.start_delay
+        delay = 0.0 if cur.paused else self.start_delay * cur.speed  # wall s -> session s
         return {
             "reset_requests": cur.reset_requests + 1,
             "start_clock": self.clock_now(cur) + delay,
@@ -172,6 +218,34 @@ class SessionView:
         """Restart every robot from standing (t = 0), all together."""
         self._shown = None
         return self._box.modify(self._restart_at)
+
+    def _restart_when_due(self, frame: LiveFrame) -> None:
+        """The session's own restart: all robots together, ``FALL_HOLD_S`` after a robot fell
+        (not while paused: a paused fall stays shown until the session runs again) or once
+        every robot has walked its whole plan. Runs where the frames arrive, so a session
+        whose robots run in several processes restarts them all at once."""
+        intent = self.intent
+        if intent.paused or frame.paused or not frame.robots:
+            return
+        if frame.intent_version < self._auto_version:  # the last one is not carried out yet
+            return
+        fallen = [
+            r.fell_clock
+            for r in frame.robots
+            if r.fell and r.fell_clock is not None and not r.waiting
+        ]
+        due = any(frame.clock >= c + FALL_HOLD_S - 1e-9 for c in fallen) or all(
+            r.finished for r in frame.robots
+        )
+        if not due:
+            return
+
+        def restart(cur: Intent) -> dict:
+            if cur.paused or cur.reset_requests != intent.reset_requests:
+                return {}  # paused meanwhile, or restarted by someone: nothing to add
+            return {**self._restart_at(cur), "auto_restarts": cur.auto_restarts + 1}
+
+        self._auto_version = self._box.modify(restart).version
 
     def push(self, method: str, force: Sequence[float], duration: float) -> Intent:
         """Push one robot's torso horizontally; ValueError on an unknown robot or size."""
@@ -215,6 +289,27 @@ class SessionView:
         """The session clock of the instant shown, or None when showing the present."""
         return self._shown if self.intent.paused else None
 
+    def playback(self) -> Playback:
+        """Paused, speed, the instant shown and the timeline's range, from one place: the
+        intent says whether the session is paused and how fast it runs (a frame shown from
+        the past was made while running, so its own ``paused`` says nothing of now), the
+        kept frames give the range."""
+        intent = self.intent
+        latest, shown = self.frame(), self.shown_frame()
+        sought = self._shown if intent.paused else None
+        return Playback(
+            paused=intent.paused,
+            speed=intent.speed,
+            clock=shown.clock if shown is not None else None,
+            shown_t=shown.clock if sought is not None and shown is not None else None,
+            present=latest.clock if latest is not None else None,
+            kept=self.frames.span(),
+            realtime_factor=None if intent.paused or latest is None else latest.realtime_factor,
+            compute_realtime_factor=(
+                None if intent.paused or latest is None else latest.compute_realtime_factor
+            ),
+        )
+
     def wait_frame(self, after_seq: int = -1, timeout: float = 5.0) -> LiveFrame | None:
         """Block until a frame newer than ``after_seq`` is published; None on timeout."""
         return self._wait(lambda f: f.seq > after_seq, timeout)
@@ -257,6 +352,7 @@ class SessionView:
             self._frame = frame
             self._changed.notify_all()
         self._catch_up(frame)
+        self._restart_when_due(frame)
 
     def _catch_up(self, frame: LiveFrame) -> None:
         """Move the time base when the loops fell behind it by more than CATCH_UP_S (e.g.
@@ -310,7 +406,11 @@ class LiveSim(SessionView):
         publish_hz: float = PUBLISH_HZ,
     ):
         self._wake = threading.Event()  # set on every intent change (cuts a pacing sleep)
-        super().__init__(initial_intent(params, methods, speed), keep_s, wall=clock)
+        # a paced loop runs up to one display interval (plus a tick) ahead of the time base:
+        # robots (re)built start two intervals from now, so the loop is not already past it
+        super().__init__(
+            initial_intent(params, methods, speed), keep_s, wall=clock, start_delay=2 / publish_hz
+        )
         self._thread: threading.Thread | None = None
         self.loop = LiveLoop(
             self._box.get,

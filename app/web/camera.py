@@ -27,16 +27,21 @@ LABEL_TEXT_Y = 0.7  # [m] room the label's text takes up the screen in the top v
 
 
 def camera_pose(
-    name: str, n: int, aspect: float, along_x: bool
+    name: str, n: int, aspect: float, along_x: bool, stagger_x: float = 0.0
 ) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float], float]:
     """(position, look_at, up, vertical fov [rad]) of a named view that shows ``n`` robots
-    side by side (along x when ``along_x``) whole in a canvas of ``aspect`` = width/height."""
+    side by side (along x when ``along_x``) whole in a canvas of ``aspect`` = width/height,
+    and still whole when they are up to ``stagger_x`` [m] apart along x (one lying where it
+    fell while the others walk on: the scene centres between them)."""
     direction, up, fov_deg = CAMERA_VIEWS[name]
     d = np.asarray(direction, float) / np.linalg.norm(direction)
     spread = (max(n, 1) - 1) / 2 * ROBOT_SPACING + VIEW_MARGIN
     top = LABEL_HEIGHT + 0.25 + LABEL_STAGGER * max(n - 1, 0)  # the highest label
-    lo = np.array([-spread if along_x else -VIEW_MARGIN, -VIEW_MARGIN if along_x else -spread, 0])
-    hi = np.array([spread if along_x else 1.2, VIEW_MARGIN if along_x else spread, top])
+    half = stagger_x / 2 if n > 1 else 0.0
+    lo = np.array(
+        [(-spread if along_x else -VIEW_MARGIN) - half, -VIEW_MARGIN if along_x else -spread, 0]
+    )
+    hi = np.array([(spread if along_x else 1.2) + half, VIEW_MARGIN if along_x else spread, top])
     if name == "top":  # the outer label lies beside its robot, up the screen (label_point)
         hi[1] = max(hi[1], lo[1] + 2 * spread - VIEW_MARGIN + LABEL_SIDE_Y + LABEL_TEXT_Y)
     centre = (lo + hi) / 2

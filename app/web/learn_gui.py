@@ -4,8 +4,13 @@ explanations and the kinematic analysis (Fig. 1-2, eq. 1-5). The text lives in
 
 A lesson button writes intent only (parameters from their defaults, methods, a restart, as a
 preset does) and moves the clicking browser's camera. The live numbers are computed on the
-display thread from the frames the view shows and the session's 50 Hz plot rows, counted
-from the moment the lesson's robots restarted: nothing under a lesson is written in advance.
+display thread from the frames the view shows and the session's 50 Hz plot rows: nothing
+under a lesson is written in advance. The "max seen" and "share of the time" columns count
+from the last change (the lesson's start, a parameter, the robots shown, a restart asked for;
+not the session's own restart after a fall), so a change's effect can be read; the falls
+count from the lesson's start. The lesson's text follows the state (``Lesson.now``), and
+when the numbers cannot follow the robots (changed by hand, waiting for a restart), the tab
+says so rather than freezing.
 """
 
 from __future__ import annotations
@@ -18,8 +23,10 @@ import numpy as np
 
 from app.live import LiveFrame, live_params
 from app.live.history import COL
+from app.live.pool import PoolFull
+from app.methods import METHOD_INFO
 from app.web.lessons import CLEAN_LIMIT_M, EXPLAIN, LESSONS, Lesson, analysis_html
-from controller.params import GROUPS, METHOD_INFO
+from controller.params import GROUPS
 
 if TYPE_CHECKING:
     from app.live.frames import RobotFrame
@@ -34,11 +41,11 @@ STATUS_COLOURS = {
 }
 COLUMNS = {  # row label of each live number (Lesson.numbers)
     "status": "status now",
-    "shares": "share of the time since the lesson started",
+    "shares": "share of the time since the last change",
     "step": "step length in force",
     "falls": "falls since the lesson started",
-    "reach": "leg reach now (max seen)",
-    "kappa": "kappa(J) of the legs now (max)",
+    "reach": "leg reach now (max since the last change)",
+    "kappa": "kappa(J) of the legs now (max since the last change)",
     "waist": "waist yaw now (last two steps)",
     "rate": "peak waist rate, last two steps",
     "rate_now": "waist rate now",
@@ -62,21 +69,25 @@ def _num(v: float, digits: int = 0) -> str:
 
 
 class _Tally:
-    """What one robot did since the lesson started, from the frames the view showed."""
+    """What one robot did since the last change, from the frames the view showed."""
 
-    def __init__(self, falls: int):
+    def __init__(self) -> None:
         self.frames = 0
         self.status: dict[str, int] = {}
         self.reach_max = 0.0
-        self.falls0 = falls
+        self.kappa_max = 0.0
 
     def add(self, r: RobotFrame) -> None:
-        if r.waiting:
+        if r.waiting or r.finished:
             return
         self.frames += 1
         self.status[r.status] = self.status.get(r.status, 0) + 1
+        if r.fell:
+            return  # lying on the floor: its legs' reach and kappa say nothing
         if np.all(np.isfinite(r.reach)):
             self.reach_max = max(self.reach_max, float(np.max(r.reach)))
+        if math.isfinite(r.kappa_legs):
+            self.kappa_max = max(self.kappa_max, r.kappa_legs)
 
 
 class LearnTab:
@@ -87,7 +98,11 @@ class LearnTab:
         self.panel = panel
         self.lesson: Lesson | None = None
         self.start_clock = math.inf  # [s] session clock the lesson's robots started at
-        self.tallies: dict[str, _Tally] = {}
+        self.tallies: dict[str, _Tally] = {}  # since the last change
+        self.falls0: dict[str, int] = {}  # each robot's falls when the lesson started
+        self._change: tuple | None = None  # (params, methods, restarts asked for) in force
+        self._change_version = 0  # the intent of the last change: frames before it not counted
+        self.since = math.inf  # [s] session clock of the last change
         self._shown_time = -math.inf
         self._last_seq = -1
         self._camera: tuple[str, Any] | None = None  # a view to set once the robots are drawn
@@ -98,12 +113,13 @@ class LearnTab:
             )
             self.buttons = []
             for i, lesson in enumerate(LESSONS):
-                button = gui.add_button(lesson.title)
+                button = panel.writer(gui.add_button(lesson.title))
                 button.on_click(lambda e, i=i: self.start(i, e.client))
                 self.buttons.append(button)
             # title, then the live numbers (seen without scrolling), then what to look for
             self.head = gui.add_html("")
             self.live = gui.add_html("")
+            self.now = gui.add_html("")
             self.text = gui.add_html("")
         with gui.add_folder("Explain", expand_by_default=False):
             self.layer_choice = gui.add_dropdown(
@@ -128,18 +144,28 @@ class LearnTab:
     def start(self, index: int, client: Any = None) -> None:
         """Set up lesson ``index``: parameters from their defaults plus the lesson's, its
         robots, a restart (so the numbers count from the same instant), its camera view."""
+        if self.panel._guarded():
+            return
         lesson = LESSONS[index]
         session = self.panel.session
         setup = lesson.setup()
         groups = {k: v for k, v in setup.items() if k in GROUPS}
+        try:
+            session.set_methods(setup["methods"])
+        except PoolFull as exc:
+            self.live.content = (
+                f"<b>Not started:</b> {html.escape(str(exc))}: this lesson needs "
+                f"{len(lesson.methods)} robots and the workers are full."
+            )
+            return
         session.set_params(live_params().replace(**groups))
-        session.set_methods(setup["methods"])
         if session.intent.paused:  # an experiment starts walking
             session.resume()
         intent = session.reset()
         self.lesson = lesson
         self.start_clock = intent.start_clock
-        self.tallies = {}
+        self.tallies, self.falls0 = {}, {}
+        self._change = None
         self._shown_time = -math.inf
         self.head.content = (
             f'<div style="font: 13px/1.45 sans-serif"><b>{html.escape(lesson.title)}</b><br/>'
@@ -151,6 +177,7 @@ class LearnTab:
             f"{lesson.equations_html()}</div>"
         )
         self.live.content = "<i>waiting for the robots to restart...</i>"
+        self.now.content = ""
         # The view is fitted to the robots shown: set it once the scene shows the lesson's.
         self._camera = (lesson.view, client)
 
@@ -159,22 +186,49 @@ class LearnTab:
         """Tally the shown ``frame`` and refresh the lesson's live numbers (at most
         :data:`NUMBERS_HZ` a second while running, every new frame while paused)."""
         lesson = self.lesson
-        if lesson is None or frame.clock < self.start_clock - 1e-9:
+        if lesson is None:
             return
         if tuple(r.method for r in frame.robots) != lesson.methods:
-            return  # the robots were changed by hand: the numbers of the lesson stop
+            # the robots were changed by hand (or a new robot has not sent a frame yet)
+            self._show(
+                now,
+                frame,
+                '<div class="lesson-live" style="font: 12.5px sans-serif"><i>This lesson\'s '
+                "robots are not the ones shown now: press its button to start it again."
+                "</i></div>",
+            )
+            return
+        if frame.clock < self.start_clock - 1e-9:
+            return  # the robots have not restarted yet: "waiting for the robots to restart"
         if self._camera is not None:  # the scene has drawn this frame's robots already
             view, client = self._camera
             self._camera = None
             self.panel.view.scene.set_camera(view, client)
-        if frame.seq != self._last_seq and not frame.paused:
+        intent = self.panel.session.intent
+        change = (intent.params, intent.methods, intent.reset_requests - intent.auto_restarts)
+        if change != self._change:  # the "max seen" columns count from here
+            restarted = self._change is None or change[2] != self._change[2]
+            self._change, self._change_version = change, intent.version
+            self.tallies = {}
+            # after a restart, from the robots' start; after a new setting, from now
+            self.since = max(frame.clock, intent.start_clock) if restarted else frame.clock
+        counted = frame.intent_version >= self._change_version and frame.clock >= self.since
+        if frame.seq != self._last_seq and not frame.paused and counted:
             self._last_seq = frame.seq
             for r in frame.robots:
-                self.tallies.setdefault(r.method, _Tally(r.falls)).add(r)
+                self.tallies.setdefault(r.method, _Tally()).add(r)
+                self.falls0.setdefault(r.method, r.falls)
+        if lesson.now is not None:
+            sentence = f'<div style="font: 13px/1.45 sans-serif">{lesson.now(intent.params)}</div>'
+            if self.now.content != sentence:
+                self.now.content = sentence
+        self._show(now, frame, None)
+
+    def _show(self, now: float, frame: LiveFrame, content: str | None) -> None:
         if not (frame.paused or now - self._shown_time >= 1.0 / NUMBERS_HZ):
             return
         self._shown_time = now
-        content = self.numbers_html(frame)
+        content = content if content is not None else self.numbers_html(frame)
         if self.live.content != content:
             self.live.content = content
 
@@ -200,15 +254,20 @@ class LearnTab:
             )
         since = frame.clock - self.start_clock
         state = "paused" if frame.paused else "live"
+        changed = (
+            f"; last change at t = {self.since:.1f} s"
+            if math.isfinite(self.since) and self.since > self.start_clock + 0.05
+            else ""
+        )
         return (
             f'<div class="lesson-live" style="font: 12.5px sans-serif">'
-            f"<b>{state}</b>, t = {frame.clock:.2f} s ({since:.1f} s into the lesson)"
+            f"<b>{state}</b>, t = {frame.clock:.2f} s ({since:.1f} s into the lesson{changed})"
             f'<table style="border-collapse:collapse;margin-top:4px"><tr><th></th>{head}</tr>'
             f"{''.join(rows)}</table></div>"
         )
 
     def _cell(self, key: str, r: RobotFrame, rows: np.ndarray | None) -> str:
-        tally = self.tallies.get(r.method) or _Tally(r.falls)
+        tally = self.tallies.get(r.method) or _Tally()
         recent = rows if rows is not None and len(rows) else np.full((1, len(COL)), np.nan)
 
         def col(name: str) -> np.ndarray:
@@ -216,6 +275,11 @@ class LearnTab:
             return v[np.isfinite(v)]
 
         if key == "status":
+            if r.fell and r.fell_clock is not None:
+                return (
+                    f'<b style="color:{STATUS_COLOURS["fell"]}">fell at t = '
+                    f"{r.fell_clock:.1f} s</b>"
+                )
             status = "standing by to start" if r.waiting else r.status
             colour = STATUS_COLOURS.get(status, "#444")
             return f'<b style="color:{colour}">{status}</b>'
@@ -229,13 +293,11 @@ class LearnTab:
         if key == "step":
             return f"{r.step_length:.2f} m (step {max(r.step_index, 0)})"
         if key == "falls":
-            return str(r.falls - tally.falls0)
+            return str(r.falls - self.falls0.get(r.method, r.falls))
         if key == "reach":
             return f"{_num(float(np.max(r.reach)), 3)} ({_num(tally.reach_max, 3)})"
         if key == "kappa":
-            k = col("kappa")
-            peak = float(k.max()) if k.size else math.nan
-            return f"{_num(r.kappa_legs)} ({_num(peak)})"
+            return f"{_num(r.kappa_legs)} ({_num(tally.kappa_max)})"
         if key == "waist":
             w = col("waist_deg")
             span = f"{w.min():+.1f} to {w.max():+.1f}°" if w.size else "-"

@@ -8,10 +8,13 @@ here was measured on this model with ``pelvic-walk simulate`` (see the comments)
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+from app.live import FALL_HOLD_S
 from app.web.lesson_math import analysis_html, analysis_svg, equations
+from controller.params import METHODS
 
 __all__ = [
     "CLEAN_LIMIT_M",
@@ -72,6 +75,9 @@ class Lesson:
     equations: tuple[str, ...]  # numbers of app.web.lesson_math.EQUATIONS
     numbers: tuple[str, ...]
     groups: dict[str, dict[str, Any]] = field(default_factory=dict)  # other parameter groups
+    # one sentence read from the parameters in force (e.g. whether the arms swing now), shown
+    # above ``watch``: the text follows what the student changed
+    now: Callable[[Any], str] | None = None
 
     def setup(self) -> dict[str, Any]:
         """The preset form (as :data:`PRESETS`): parameter groups, methods, from defaults."""
@@ -116,8 +122,8 @@ LESSONS: tuple[Lesson, ...] = (
         "lift-off</b>, and open the <b>Inspect</b> tab: the reference angle (eq. 30-31) already "
         "sees the next footholds over the 1.6 s horizon, and the MPC's plan (eq. 37) turns the "
         "pelvis toward the coming swing before the foot lifts (its rate reverses in the DSP). "
-        "The numbers below are read from the paused frame: the planned angle now and at the "
-        "end of the horizon, and the waist rate now.",
+        "The table above is read from the frame shown (paused, the paused instant): the "
+        "planned angle now and at the end of the horizon, and the waist rate now.",
         ("30", "31", "37"),
         ("phase", "plan", "rate_now", "waist", "liftoff"),
     ),
@@ -127,13 +133,20 @@ LESSONS: tuple[Lesson, ...] = (
         {"step_length": 0.30, "step_time": 1.2},
         ("fixed", "mpc"),
         "follow",
-        "The arms are <b>off</b>: each swinging leg twists the body about the vertical and the "
-        "yaw-momentum <b>arrow</b> at the CoM grows. Read the peak over the last two steps, then "
-        "tick <b>Arm swing: enabled</b> (Controls tab) and watch it fall as the arms cancel "
-        "the legs' momentum (eq. 43); the paper reports up to -60 % in its experiment.",
+        "The lesson starts with the arms still: each swinging leg twists the body about the "
+        "vertical and the black yaw-momentum <b>arrow</b> over the head grows. Read the peak "
+        "over the last two steps in the table, then tick <b>Arm swing</b> (Controls tab, "
+        "folder <i>Arm swing</i>) and watch the peak fall as the arms cancel the legs' "
+        "momentum (eq. 43); the paper reports up to -60 % in its experiment.",
         ("41", "43"),
         ("arms", "yaw", "waist", "falls"),
         {"arms": {"enabled": False}},
+        now=lambda p: (
+            "Arm swing is <b>on</b> now: the arms swing against the legs; compare the peak "
+            "yaw momentum with the one you read with the arms still."
+            if p.arms.enabled
+            else "Arm swing is <b>off</b> now: the arms hang still."
+        ),
     ),
     Lesson(
         "4. Horizon length and k_pel",
@@ -173,8 +186,10 @@ LESSONS: tuple[Lesson, ...] = (
         "0.42 m is eq. 5 with the pelvis at 45° as the paper evaluates it (the Kinematic analysis "
         "below). Our fixed pelvis walks further than the static eq. 4 (0.316 m): the stance hip "
         f"travels forward during the step, so our limits are fixed {_F:.2f} m, MPC {_M:.2f} m "
-        f"(paper: {_PF:.2f} / {_PM:.2f} m). Here the fixed robot falls; the MPC walks with much "
-        "less than 45°. Compare the measured hip advance with eq. 2's l_pel sin(theta).",
+        f"(paper: {_PF:.2f} / {_PM:.2f} m). Here the fixed robot <b>falls</b> in its second "
+        f"step: it lies where it fell, ringed in red, for {FALL_HOLD_S:g} s while the MPC walks "
+        "on with much less than 45°, then both restart together. Compare the measured hip "
+        "advance with eq. 2's l_pel sin(theta).",
         ("2", "4", "5"),
         ("step", "hip", "waist", "reach", "status", "falls"),
     ),
@@ -187,8 +202,9 @@ LESSONS: tuple[Lesson, ...] = (
         "Open <b>Push a robot</b> (Controls tab) and push one robot sideways. The CoM MPC "
         "re-plans from the measured CoM at the next tick and moves the ZMP inside the support "
         "foot (eq. 18), but <b>nothing moves the footsteps</b>: a push the foot cannot absorb "
-        "topples the robot. <code>pelvic-walk push-study</code> measures each method's limit "
-        "(README, Push).",
+        f"topples the robot (try 300 N): it lies ringed in red for {FALL_HOLD_S:g} s, then "
+        "every robot restarts together. <code>pelvic-walk push-study</code> measures each "
+        "method's limit (README, Push).",
         ("18",),
         ("pushing", "lateral", "status", "falls"),
     ),
@@ -207,7 +223,7 @@ EXPLAIN: dict[str, str] = {
         "A linear inverted pendulum at constant height, state [p, v, a] per axis, input = jerk "
         "(eq. 10-12). Over the horizon H it trades **alpha** x ZMP tracking, **beta** x CoM "
         "velocity changes and **gamma** x jerk (eq. 18), keeping the ZMP inside the support "
-        "area. The **cyan** points are its predicted CoM (eq. 25-26)."
+        "area. The **purple** path on the floor is its predicted CoM (eq. 25-26)."
     ),
     "Pelvis position (eq. 19)": (
         "The pelvis follows the desired CoM and corrects the offset to the CoM measured from "
@@ -217,18 +233,20 @@ EXPLAIN: dict[str, str] = {
     "Feet (eq. 20-21)": (
         "The support foot stays on its foothold; the swing foot follows a cubic from the old "
         "to the new foothold with zero velocity at both ends, plus a smooth lift (eq. 20-21). "
-        "The **white/coloured curve** is the path of the swing in progress; the rectangles are "
-        "the planned footholds (0.30 x 0.17 m feet)."
+        "The grey curve (Layers: Swing-foot path) is the path of the swing in progress; the grey "
+        "rectangles are the planned footholds (0.30 x 0.17 m feet)."
     ),
     "Reference pelvic angle (eq. 27-33)": (
         "At each predicted sample the pelvis is put at the predicted CoM (eq. 27) and the angle "
         "is the mean over both feet of atan(k_pel dx / dy) (eq. 28-33), signed so each hip "
-        "turns **toward its own foot**. The **yellow hip lines** show it over the horizon."
+        "turns **toward its own foot**. The **crimson dashed hip lines** on the floor show it "
+        "over the horizon."
     ),
     "Pelvic-rotation MPC (eq. 34-38)": (
         "A double integrator theta'' = u tracks the reference with weight **alpha_pel** and "
         "penalises u with **beta_pel**, with |theta| under the angle limit (eq. 34-38). The "
-        "**orange hip lines** are its optimised angles: it starts turning *before* the swing."
+        "**purple solid hip lines** are its optimised angles: it starts turning *before* the "
+        "swing. At small beta_pel they lie on the reference's (the Inspect tab says why)."
     ),
     "QP inverse kinematics (eq. 39-40)": (
         "13 joint velocities (waist yaw + two legs) make the feet follow their paths: "
@@ -239,7 +257,7 @@ EXPLAIN: dict[str, str] = {
     "Arm swing (eq. 41-43)": (
         "The arms cancel the legs' yaw momentum: min omega1 (h_low + h_up)^2 + omega2 "
         "||q_up0 - q_up||^2 + omega3 ||q'_up||^2 on the centroidal momentum matrix "
-        "(eq. 41-43). The **arrow** at the CoM is the whole-body yaw momentum."
+        "(eq. 41-43). The black **arrow** over the head is the whole-body yaw momentum."
     ),
     "Energy and kappa (eq. 44-45)": (
         "Energy = sum of the positive joint work per two-step window (eq. 44). kappa(J) is the "
@@ -254,8 +272,9 @@ EXPLAIN: dict[str, str] = {
 }
 
 
-def warnings_for(params: Any) -> list[str]:
-    """Settings known to break walking, explained in one line each (empty when none)."""
+def warnings_for(params: Any, methods: tuple[str, ...] = METHODS) -> list[str]:
+    """Settings known to break walking, explained in one line each (empty when none), for
+    the robots shown (``methods``)."""
     w = params.walk
     out = []
     if params.com.horizon < w.step_time:
@@ -269,14 +288,16 @@ def warnings_for(params: Any) -> list[str]:
             f"A double support of {1000 * w.dsp_ratio * w.step_time:.0f} ms leaves the CoM "
             "very little time to move to the new support foot."
         )
-    if params.pelvis.k_pel == 0.0:
+    if params.pelvis.k_pel == 0.0 and "mpc" in methods:
         out.append("k_pel = 0: the reference pelvic angle is 0, the MPC plans no rotation.")
-    beyond = [m for m, lim in CLEAN_LIMIT_M.items() if w.step_length > lim + 1e-9]
+    names = {"fixed": "fixed", "redundancy": "redundancy", "mpc": "MPC"}
+    shown = [m for m in METHODS if m in methods]
+    beyond = [m for m in shown if w.step_length > CLEAN_LIMIT_M[m] + 1e-9]
     if beyond:
+        limits = ", ".join(f"{names[m]} {CLEAN_LIMIT_M[m]:.2f} m" for m in shown)
         out.append(
             f"{w.step_length:.2f} m is beyond the longest clean step measured here for "
-            f"{', '.join(beyond)} (fixed {CLEAN_LIMIT_M['fixed']:.2f} m, redundancy "
-            f"{CLEAN_LIMIT_M['redundancy']:.2f} m, MPC {CLEAN_LIMIT_M['mpc']:.2f} m at 1.2 s "
-            "steps): watch the status badges."
+            f"{', '.join(names[m] for m in beyond)} ({limits} at 1.2 s steps): watch the "
+            "status badges."
         )
     return out

@@ -1,5 +1,12 @@
-"""Geometry of the scene's overlays (footholds, prediction, swing path, stick diagram) and
-their colours; an :class:`Overlay` re-sends a handle's data only when it changed."""
+"""Geometry of the scene's overlays (footholds, prediction, swing path, stick diagram, fall
+marker) and their colours; an :class:`Overlay` re-sends a handle's data only when it changed.
+
+One colour per meaning, in the scene, its legend, the horizon inspector and the recordings:
+REFERENCE (what a layer is asked to follow: ZMP reference, theta_ref; drawn dashed or hollow),
+PREDICTED (what an MPC optimised or predicts over its horizon: CoM path, the MPC's theta, the
+predicted ZMP; solid), MEASURED (the simulated robot: centre of pressure, yaw momentum; black),
+PLAN (the footstep plan's geometry: footholds, support polygon, swing path; grey) and DANGER
+(a leg nearly straight, a fall; bright red). None of them is a method colour (app.methods)."""
 
 from __future__ import annotations
 
@@ -10,17 +17,23 @@ import numpy as np
 
 from app.live import RobotFrame
 from app.live.history import FrameStore
+from app.methods import METHOD_INFO
 from controller.footsteps import LEFT
-from controller.params import METHOD_INFO
 from controller.pelvis_reference import hip_points
 
-# Overlay colours (none of them a method colour).
-PREDICTION = (140, 60, 200)  # predicted CoM path and hip lines
-GROUND = (120, 120, 120)  # footholds, swing path
-SUPPORT = (40, 40, 40)
-ZMP_REF, ZMP_MEAS = (200, 30, 60), (20, 20, 20)
-MOMENTUM = (90, 40, 130)
+# One colour per meaning (module docstring).
+REFERENCE = (205, 30, 70)  # crimson
+PREDICTED = (120, 50, 200)  # purple
+MEASURED = (20, 20, 20)  # black
+PLAN = (120, 120, 120)  # grey
+DANGER = (240, 0, 0)  # bright red
+PREDICTION = PREDICTED  # the CoM path and the MPC's hip lines
+GROUND = PLAN  # footholds, swing path
+SUPPORT = (40, 40, 40)  # the support polygon: the plan's, darker (it is under the robot)
+ZMP_REF, ZMP_MEAS = REFERENCE, MEASURED
+MOMENTUM = MEASURED
 STICK_START, STICK_END = (160, 160, 160), (30, 30, 30)
+FALL_RING = 0.55  # [m] radius of the ring on the floor around a fallen robot
 HIP_BAR = 0.18  # [m] half length of the hip lines drawn on the floor (the pelvis: 0.105)
 HIP_EVERY = 4  # hip lines at every 4th horizon sample (0.4 s apart at T_p = 0.1 s)
 FLOOR_Z = 0.006  # [m] overlays on the floor, just above it
@@ -73,16 +86,15 @@ def legend_html() -> str:
 
     robots = "".join(sw(i.color, i.title) for i in METHOD_INFO.values())
     parts = [
-        sw(PREDICTION, "predicted CoM and MPC hip line"),
-        sw(PREDICTION, "theta_ref", dash=True),
-        sw(ZMP_REF, "ZMP reference"),
-        sw(ZMP_MEAS, "measured ZMP (CoP)"),
-        sw(GROUND, "footholds"),
-        sw((240, 0, 0), "leg nearly straight"),
+        sw(PREDICTED, "<b>predicted</b> / optimised: CoM path, MPC hip line θ"),
+        sw(REFERENCE, "<b>reference</b>: θ_ref hip line, ZMP reference (disc)", dash=True),
+        sw(MEASURED, "<b>measured</b>: CoP (dot), yaw momentum (arrow)"),
+        sw(PLAN, "plan: footholds"),
+        sw(DANGER, "leg nearly straight; fall (ring)"),
     ]
     return (
         f"<div style='font-size:12px;line-height:1.8'>Robots (torso): {robots}<br>"
-        f"{''.join(parts)}</div>"
+        f"{'<br>'.join(parts)}</div>"
     )
 
 
@@ -123,25 +135,53 @@ def colored(parts: list[tuple[np.ndarray, tuple[int, int, int]]]) -> tuple[np.nd
     return seg, col
 
 
-def robot_prediction(r: RobotFrame, y: np.ndarray) -> list[np.ndarray]:
-    """Predicted CoM path and hip lines over the horizon, on the floor (Fig. 5-6)."""
+def robot_prediction(r: RobotFrame, y: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int, int]]]:
+    """Predicted CoM path and hip lines over the horizon, on the floor (Fig. 5-6), as
+    (segments, colour) pairs."""
     hz = r.horizon
     if hz is None:
         return []
     com = np.vstack([r.com[None, :2], hz.com]) + y
     path = polyline_segments(np.column_stack([com, np.full(len(com), FLOOR_Z + 0.004)]))
+    return [(path, PREDICTED), *robot_hip_lines(r, y)]
+
+
+def robot_hip_lines(r: RobotFrame, y: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int, int]]]:
+    """The hip lines on the floor, (segments, colour) pairs: the MPC robot's optimised theta
+    (PREDICTED, solid) and its reference theta_ref (REFERENCE, dashed and longer, so both show
+    where they coincide) at every HIP_EVERY-th predicted sample; the redundancy robot's hip
+    line now (it plans none); none for the fixed pelvis."""
+    hz = r.horizon
+    if hz is None:
+        return []
 
     def bars(p: np.ndarray, theta: np.ndarray, half: float = HIP_BAR) -> np.ndarray:
         hp = hip_points(p + y, theta, half)  # (N, 2, 2)
         return np.concatenate([hp, np.full((len(theta), 2, 1), FLOOR_Z + 0.006)], axis=2)
 
-    out = [path]
-    if r.method == "mpc":  # theta_ref's lines longer, so both show where they coincide
+    if r.method == "mpc":
         k = slice(HIP_EVERY - 1, None, HIP_EVERY)
-        out += [bars(hz.com, hz.theta)[k], dashed(bars(hz.com, hz.theta_ref, 1.5 * HIP_BAR)[k])]
-    elif r.method == "redundancy":  # no plan: its hip line now
-        out.append(bars(r.com[None, :2], np.array([r.waist_angle_cmd])))
-    return out
+        return [
+            (bars(hz.com, hz.theta)[k], PREDICTED),
+            (dashed(bars(hz.com, hz.theta_ref, 1.5 * HIP_BAR)[k]), REFERENCE),
+        ]
+    if r.method == "redundancy":
+        return [(bars(r.com[None, :2], np.array([r.waist_angle_cmd])), PREDICTED)]
+    return []
+
+
+def fall_ring(r: RobotFrame, y: np.ndarray, pieces: int = 24) -> np.ndarray:
+    """A ring on the floor around a fallen robot (the middle of its bodies), (pieces, 2, 3)."""
+    centre = (r.body_xpos[1:, :2].min(axis=0) + r.body_xpos[1:, :2].max(axis=0)) / 2 + y
+    a = np.linspace(0.0, 2 * np.pi, pieces + 1)
+    pts = np.column_stack(
+        [
+            centre[0] + FALL_RING * np.cos(a),
+            centre[1] + FALL_RING * np.sin(a),
+            np.full(len(a), FLOOR_Z + 0.008),
+        ]
+    )
+    return polyline_segments(pts)
 
 
 def stick_segments(kept: FrameStore, r: RobotFrame) -> np.ndarray | None:

@@ -11,6 +11,12 @@ The panel also *reflects* the intent (a ``PUT /api/params`` moves the sliders): 
 value from Python fires the control's callback synchronously in viser, so :meth:`reflect`
 marks its own thread as reflecting and the callbacks ignore what they receive there; a
 callback that receives the value already in force does nothing either, so nothing can loop.
+The status line and the timeline read the session's one account of its playback
+(:meth:`~app.live.session.SessionView.playback`), as ``GET /api/state`` does.
+
+A *read-only* panel (a student's, when an instructor drives the shared demo) disables every
+control that would change the session; what is the viewer's own (camera, layers, plots,
+inspector, recording, the Learn tab's explanations) stays enabled.
 """
 
 from __future__ import annotations
@@ -22,8 +28,9 @@ from typing import TYPE_CHECKING, Any
 
 import viser
 
-from app.live import SPEED_MAX, SPEED_MIN, LiveFrame, live_params
+from app.live import FALL_HOLD_S, SPEED_MAX, SPEED_MIN, LiveFrame, Playback, live_params
 from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX
+from app.methods import METHOD_INFO
 from app.web.camera import CAMERA_VIEWS
 from app.web.learn_gui import LearnTab
 from app.web.lessons import PRESETS, warnings_for
@@ -31,12 +38,17 @@ from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.record_gui import RecordFolder
 from app.web.scene import LAYERS
-from controller.params import GROUP_TITLES, GROUPS, METHOD_INFO, METHODS, ControllerParams, spec
+from controller.params import GROUP_TITLES, GROUPS, METHODS, ControllerParams, spec
 
 if TYPE_CHECKING:
     from app.web.view import View
 
 STATUS_HZ = 2.0  # status text refreshes per second while running
+READ_ONLY_NOTE = (
+    "**The instructor drives this demo.** The controls that change the robots are off "
+    "here; the camera, layers, plots, inspector and recording are yours."
+)
+REFUSED = "**Not applied:** the instructor drives this demo (your controls are read-only)."
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
 PUSH_DIRECTIONS = {
     "left (+y)": (0.0, 1.0),
@@ -73,6 +85,8 @@ class ControlPanel:
         self._session_id = id(view.session)
         self.controls: dict[tuple[str, str], tuple[Any, bool]] = {}  # -> (handle, log scale)
         self.method_boxes: dict[str, Any] = {}
+        self.read_only = bool(getattr(view, "read_only", False))
+        self.writers: list[Any] = []  # the controls that change the session
         self._message: str | None = None  # a one-off message in the status area
         self._status_time = -math.inf
         gui.main_panel.dock_right()  # docked, not floating over the scene (viser's default)
@@ -82,8 +96,11 @@ class ControlPanel:
             show_logo=False,
             show_share_button=False,
         )
-        self.notice = gui.add_markdown(view.notice or "")
-        self.notice.visible = bool(view.notice)
+        notice = "  \n".join(
+            x for x in (view.notice, READ_ONLY_NOTE if self.read_only else None) if x
+        )
+        self.notice = gui.add_markdown(notice)
+        self.notice.visible = bool(notice)
         self.status = gui.add_markdown("starting...")
         tabs = gui.add_tab_group()
         with tabs.add_tab("Controls", viser.Icon.ADJUSTMENTS):
@@ -94,6 +111,9 @@ class ControlPanel:
             self.plots = LivePlots(gui, view.session)
         with tabs.add_tab("Learn", viser.Icon.SCHOOL):
             self.learn = LearnTab(gui, self)
+        if self.read_only:
+            for handle in self.writers:
+                handle.disabled = True
 
     @property
     def session(self):
@@ -101,15 +121,29 @@ class ControlPanel:
 
     # -- building ------------------------------------------------------------------------
     def _guarded(self) -> bool:
-        return getattr(self._local, "reflecting", False)
+        """True inside :meth:`reflect`, or on a read-only panel (the change is refused, said
+        once in the status area): a callback that sees True does nothing."""
+        if getattr(self._local, "reflecting", False):
+            return True
+        if self.read_only:
+            self._say(REFUSED)
+            return True
+        return False
+
+    def writer(self, handle: Any) -> Any:
+        """Register a control that changes the session (disabled on a read-only panel)."""
+        self.writers.append(handle)
+        return handle
 
     def _build_controls(self) -> None:
         gui = self.gui
         intent = self.session.intent
         with gui.add_folder("Playback"):
-            self.pause_button = gui.add_button("Pause", icon=viser.Icon.PLAYER_PAUSE)
+            self.pause_button = self.writer(gui.add_button("Pause", icon=viser.Icon.PLAYER_PAUSE))
             self.pause_button.on_click(lambda _e: self._toggle_pause())
-            row = gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
+            row = self.writer(
+                gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
+            )
             row.on_click(lambda e: self._step(e.target.value))
             self.timeline = gui.add_slider(  # enabled while paused (see reflect)
                 "Timeline [s] (when paused)",
@@ -121,12 +155,14 @@ class ControlPanel:
                 hint="Pause, then drag to replay the recent walk (the span under the slider)",
             )
             self.timeline.on_update(lambda _e: self._seek())
-            self.speed = gui.add_slider(
-                "Speed [x real time]", SPEED_MIN, SPEED_MAX, 0.1, intent.speed
+            self.speed = self.writer(
+                gui.add_slider("Speed [x real time]", SPEED_MIN, SPEED_MAX, 0.1, intent.speed)
             )
             self.speed.on_update(lambda _e: self._speed_changed())
-            reset = gui.add_button("Restart all robots together", icon=viser.Icon.REFRESH)
-            reset.on_click(lambda _e: self.session.reset())
+            reset = self.writer(
+                gui.add_button("Restart all robots together", icon=viser.Icon.REFRESH)
+            )
+            reset.on_click(lambda _e: self._reset())
         with gui.add_folder("View"):
             cams = gui.add_button_group("Camera", tuple(CAMERA_VIEWS))
             cams.on_click(lambda e: self.view.scene.set_camera(e.target.value, e.client))
@@ -139,12 +175,14 @@ class ControlPanel:
             gui.add_html(legend_html())
         with gui.add_folder("Compare"):
             for method in METHODS:
-                box = gui.add_checkbox(METHOD_INFO[method].title, method in intent.methods)
+                box = self.writer(
+                    gui.add_checkbox(METHOD_INFO[method].title, method in intent.methods)
+                )
                 box.on_update(lambda _e: self._methods_changed())
                 self.method_boxes[method] = box
         with gui.add_folder("Presets", expand_by_default=False):
             for name in PRESETS:
-                button = gui.add_button(name)
+                button = self.writer(gui.add_button(name))
                 button.on_click(lambda _e, name=name: self.apply_preset(name))
         for group in GROUPS:
             meta_all = spec(getattr(intent.params, group))
@@ -158,16 +196,20 @@ class ControlPanel:
             gui.add_markdown(
                 "A horizontal push on the torso. The CoM MPC re-plans from the measured state "
                 "at the next tick; **nothing moves the footsteps**, so a push must be absorbed "
-                "within the planned footholds: a strong one makes the robot fall (it gets up "
-                "after 2 s)."
+                "within the planned footholds: a strong one makes the robot fall (it lies where "
+                f"it fell for {FALL_HOLD_S:g} s, marked red, then every robot restarts)."
             )
-            self.push_robot = gui.add_dropdown("Robot", intent.methods)
-            self.push_force = gui.add_slider("Force [N]", 10.0, PUSH_FORCE_MAX, 10.0, 60.0)
-            self.push_dir = gui.add_dropdown(
-                "Direction", tuple(PUSH_DIRECTIONS), initial_value="left (+y)"
+            self.push_robot = self.writer(gui.add_dropdown("Robot", intent.methods))
+            self.push_force = self.writer(
+                gui.add_slider("Force [N]", 10.0, PUSH_FORCE_MAX, 10.0, 60.0)
             )
-            self.push_time = gui.add_slider("Duration [s]", 0.05, PUSH_DURATION_MAX, 0.05, 0.1)
-            go = gui.add_button("Push", icon=viser.Icon.HAND_STOP)
+            self.push_dir = self.writer(
+                gui.add_dropdown("Direction", tuple(PUSH_DIRECTIONS), initial_value="left (+y)")
+            )
+            self.push_time = self.writer(
+                gui.add_slider("Duration [s]", 0.05, PUSH_DURATION_MAX, 0.05, 0.1)
+            )
+            go = self.writer(gui.add_button("Push", icon=viser.Icon.HAND_STOP))
             go.on_click(lambda _e: self._push())
         with gui.add_folder("Layers", expand_by_default=False):
             self.layer_boxes = {}
@@ -210,7 +252,7 @@ class ControlPanel:
             else:
                 handle = gui.add_number(label, value, min=lo, max=hi, step=step, hint=_hint(meta))
         handle.on_update(lambda _e, g=group, n=name: self._param_changed(g, n))
-        self.controls[(group, name)] = (handle, log)
+        self.controls[(group, name)] = (self.writer(handle), log)
 
     @staticmethod
     def _to_slider(value: float, meta: dict[str, Any]) -> float:
@@ -249,13 +291,22 @@ class ControlPanel:
             return
         self.session.set_speed(self.speed.value)
 
+    def _reset(self) -> None:
+        if self._guarded():
+            return
+        self.session.reset()
+
     def _toggle_pause(self) -> None:
+        if self._guarded():
+            return
         if self.session.intent.paused:
             self.session.resume()
         else:
             self.session.pause()
 
     def _step(self, which: str) -> None:
+        if self._guarded():
+            return
         until = {"5 ms tick": "tick", "to lift-off": "liftoff", "to landing": "landing"}[which]
         self.session.step(until)
 
@@ -268,6 +319,8 @@ class ControlPanel:
             self._say(html.escape(str(exc)))
 
     def _push(self) -> None:
+        if self._guarded():
+            return
         dx, dy = PUSH_DIRECTIONS[self.push_dir.value]
         f = float(self.push_force.value)
         try:
@@ -286,6 +339,8 @@ class ControlPanel:
     def apply_preset(self, name: str) -> None:
         """Apply one of :data:`PRESETS`: parameters (and methods); restart the robots together
         so side-by-side robots compare the same instants."""
+        if self._guarded():
+            return
         preset = PRESETS[name]
         groups = {k: v for k, v in preset.items() if k in GROUPS}
         base = live_params() if preset.get("reset_groups") else self.session.intent.params
@@ -315,15 +370,16 @@ class ControlPanel:
                 self.pause_button.icon = (
                     viser.Icon.PLAYER_PLAY if intent.paused else viser.Icon.PLAYER_PAUSE
                 )
-                self.timeline.disabled = not intent.paused
+                self.timeline.disabled = self.read_only or not intent.paused
             finally:
                 self._local.reflecting = False
             self._reflected_version = intent.version
         if frame is not None:
-            if frame.paused or now - self._status_time >= 1.0 / STATUS_HZ:
+            playback = session.playback()
+            if playback.paused or now - self._status_time >= 1.0 / STATUS_HZ:
                 self._status_time = now
-                self._update_status(frame, intent.params)
-            self._update_timeline(frame)
+                self._update_status(frame, playback, intent)
+                self._update_timeline(playback)
             self.plots.update(frame, now)
             self.inspector.update(frame, now)
             self.learn.update(frame, now)
@@ -336,52 +392,51 @@ class ControlPanel:
             if handle.value != shown:
                 handle.value = shown
 
-    def _update_timeline(self, frame: LiveFrame) -> None:
-        if not self.session.intent.paused:  # the slider rests at the present while running
-            if self.timeline.value != self.timeline.max:
-                self._local.reflecting = True
-                try:
-                    self.timeline.value = self.timeline.max
-                finally:
-                    self._local.reflecting = False
+    def _update_timeline(self, playback: Playback) -> None:
+        """The timeline spans what is kept (running or paused) and rests at the instant shown
+        (the present while running)."""
+        if playback.kept is None or playback.clock is None:
             return
-        span = self.session.frames.span()
-        if span is None:
-            return
+        lo, hi = (
+            round(playback.kept[0], 3),
+            round(max(playback.kept[1], playback.kept[0] + 0.01), 3),
+        )
+        value = min(max(playback.clock, lo), hi)
         self._local.reflecting = True
         try:
-            lo, hi = round(span[0], 3), round(max(span[1], span[0] + 0.01), 3)
             if (self.timeline.min, self.timeline.max) != (lo, hi):
                 self.timeline.min, self.timeline.max = lo, hi
-            if abs(self.timeline.value - frame.clock) > 1e-6:
-                self.timeline.value = min(max(frame.clock, lo), hi)
+            if abs(self.timeline.value - value) > 1e-6:
+                self.timeline.value = value
         finally:
             self._local.reflecting = False
 
-    def _update_status(self, frame: LiveFrame, params: ControllerParams) -> None:
-        rtf = frame.realtime_factor
-        head = (
-            f"**Paused** at t = {frame.clock:.2f} s"
-            if frame.paused
-            else f"Running at {frame.speed:g}x, real-time factor "
-            + (f"{rtf:.2f}" if rtf is not None else "-")
-        )
-        lines = [head]
+    def _update_status(self, frame: LiveFrame, playback: Playback, intent: Any) -> None:
+        lines = [playback.describe()]
         for r in frame.robots:
-            kappa = f"{r.kappa_legs:.0f}" if math.isfinite(r.kappa_legs) else "-"
-            state = (
-                "standing by to start in phase"
-                if r.waiting
-                else f"step {max(r.step_index, 0)}, {r.step_length:.2f} m"
-            )
+            if r.fell:
+                state = "down (the session restarts every robot soon)"
+            elif r.waiting:
+                state = "standing by to start in phase"
+            elif r.finished:
+                state = "walked its whole plan"
+            else:
+                state = f"step {max(r.step_index, 0)}, {r.step_length:.2f} m"
             lines.append(
-                f"**{METHOD_INFO[r.method].title}**: {r.status}, kappa {kappa}, "
+                f"**{METHOD_INFO[r.method].title}**: {r.status}, kappa {kappa_text(r.kappa_legs)}, "
                 f"{state}, falls {r.falls}"
             )
-        lines += [f"⚠ {w}" for w in warnings_for(params)]
+        lines += [f"⚠ {w}" for w in warnings_for(intent.params, intent.methods)]
         extra = self.view.alerts()
         if self._message:
             extra.append(self._message)
         text = "  \n".join(extra + lines)
         if self.status.content != text:
             self.status.content = text
+
+
+def kappa_text(kappa: float) -> str:
+    """kappa(J) for people: whole numbers up to 9999, then 1.3e+08 style (it spans decades)."""
+    if not math.isfinite(kappa):
+        return "-"
+    return f"{kappa:.0f}" if kappa < 1e4 else f"{kappa:.1e}"

@@ -17,7 +17,9 @@ import viser.uplot
 
 from app.live.frames import LiveFrame
 from app.live.session import SessionView
-from controller.params import METHOD_INFO
+from app.methods import METHOD_INFO
+from app.sim.metrics import KAPPA_SINGULAR
+from app.web.overlays import DANGER, MEASURED, PLAN, PREDICTED, REFERENCE
 
 PLOT_HZ = 1.0  # live plot updates per second while running (each carries its whole window)
 INSPECTOR_HZ = 4.0  # horizon inspector updates per second while running
@@ -28,13 +30,46 @@ PLOTS: tuple[tuple[str, str, tuple[float, float]], ...] = (  # (row column, titl
     ("waist_deg", "Waist yaw [deg]", (-30.0, 30.0)),
     ("waist_rate_deg_s", "Waist yaw rate [deg/s]", (-60.0, 60.0)),
     ("yaw_momentum", "Yaw momentum [kg m^2/s]", (-0.5, 0.5)),
-    ("kappa", "kappa(J) of the leg columns (eq. 45)", (0.0, 100.0)),
+    (
+        "kappa",
+        "kappa(J) of the leg columns (eq. 45), log scale; dashed: knee nearly straight",
+        (1.0, 10 * KAPPA_SINGULAR),
+    ),
     ("energy_two_step", "Energy per two steps [J] (eq. 44, as Table 1)", (0.0, 100.0)),
 )
+LOG_PLOTS = {"kappa"}  # drawn on a log10 axis: a straight knee's 1e8 beside a clean 30
+LOG_MAX = 1e12  # the log axis's top at most (kappa is finite but unbounded at a straight knee)
 
 
 def css(rgb: tuple[int, int, int], alpha: float = 1.0) -> str:
     return f"rgba({rgb[0]}, {rgb[1]}, {rgb[2]}, {alpha})"
+
+
+def log_span(values: list[np.ndarray], minimum: tuple[float, float]) -> tuple[float, float]:
+    """Whole decades holding the data and at least ``minimum`` (a log axis)."""
+    finite = (
+        np.concatenate([v[np.isfinite(v) & (v > 0)] for v in values]) if values else np.zeros(0)
+    )
+    lo, hi = minimum
+    if len(finite):
+        lo = min(lo, float(np.min(finite)))
+        hi = max(hi, float(np.max(finite)))
+    hi = min(hi, LOG_MAX)
+    return 10.0 ** math.floor(math.log10(lo)), 10.0 ** math.ceil(math.log10(hi))
+
+
+def log_axis(lo: float, hi: float) -> viser.uplot.Axis:
+    """A y axis with a tick at whole decades, labelled 1, 10, 100, 1e3, ... (uPlot's default
+    labels of a log axis are numbers with thousands separators, cut off in a narrow panel);
+    every other decade when there are many."""
+    d0, d1 = round(math.log10(lo)), round(math.log10(hi))
+    every = 1 if d1 - d0 <= 6 else 2
+    decades = list(range(d0, d1 + 1, every))
+    return viser.uplot.Axis(
+        splits=tuple(10.0**d for d in decades),
+        values=tuple(f"{10**d:g}" if d < 3 else f"1e{d}" for d in decades),
+        size=44,
+    )
 
 
 def _on(x: np.ndarray, xp: np.ndarray, fp: np.ndarray) -> np.ndarray:
@@ -105,40 +140,63 @@ class LivePlots:
             # worker processes arrive in different batches)
             ys = [_on(clock, window.column(m, "clock"), window.column(m, col)) for m in methods]
             spec = next(p for p in PLOTS if p[0] == col)
-            lo, hi = _span(ys, spec[2])
+            log = col in LOG_PLOTS
+            lo, hi = log_span(ys, spec[2]) if log else _span(ys, spec[2])
             band = np.where(dsp, hi, lo)  # filled down from the line: shaded in the DSP only
+            extra = (np.full(len(x), KAPPA_SINGULAR),) if col == "kappa" else ()
             handle.data = (
                 x.astype(np.float32),
                 *(y.astype(np.float32) for y in ys),
+                *(e.astype(np.float32) for e in extra),
                 band.astype(np.float32),
             )
             scales = (seconds, round(lo, 2), round(hi, 2))
             if self._scales.get(col) != scales:  # sent only when the ranges change
                 self._scales[col] = scales
+                y_scale = (
+                    viser.uplot.Scale(range=(lo, hi), distr=3, log=10)
+                    if log
+                    else viser.uplot.Scale(range=(scales[1], scales[2]))
+                )
                 handle.scales = {
                     "x": viser.uplot.Scale(time=False, range=(-seconds, 0.0)),
-                    "y": viser.uplot.Scale(range=(scales[1], scales[2])),
+                    "y": y_scale,
                 }
+                if log:
+                    handle.axes = (viser.uplot.Axis(), log_axis(lo, hi))
 
     def _build(self, methods: tuple[str, ...]) -> None:
         for handle in self.handles.values():
             handle.remove()
         self.handles = {}
-        series = (
-            viser.uplot.Series(label="t - now [s]"),
-            *(
-                viser.uplot.Series(
-                    label=METHOD_INFO[m].title, stroke=css(METHOD_INFO[m].color), width=2
-                )
-                for m in methods
-            ),
+        robots = tuple(
             viser.uplot.Series(
-                label="double support", stroke="rgba(0,0,0,0)", fill=DSP_FILL, fillTo=-1e9, width=0
-            ),
+                label=METHOD_INFO[m].title, stroke=css(METHOD_INFO[m].color), width=2
+            )
+            for m in methods
         )
-        empty = tuple(np.zeros(2, dtype=np.float32) for _ in range(len(methods) + 2))
+        x_axis = viser.uplot.Series(label="t - now [s]")
+
+        def dsp(log: bool) -> viser.uplot.Series:  # filled down to the axis (> 0 on a log axis)
+            return viser.uplot.Series(
+                label="double support",
+                stroke="rgba(0,0,0,0)",
+                fill=DSP_FILL,
+                fillTo=1e-9 if log else -1e9,
+                width=0,
+            )
+
+        singular = viser.uplot.Series(
+            label=f"knee nearly straight ({KAPPA_SINGULAR:g})",
+            stroke=css(DANGER),
+            width=1.5,
+            dash=(6, 4),
+        )
         with self.folder:
             for col, title, _span_min in PLOTS:
+                kappa = col == "kappa"
+                series = (x_axis, *robots, *((singular,) if kappa else ()), dsp(col in LOG_PLOTS))
+                empty = tuple(np.ones(2, dtype=np.float32) for _ in series)
                 self.handles[col] = self.gui.add_uplot(
                     data=empty,
                     series=series,
@@ -152,37 +210,39 @@ class LivePlots:
 
 
 class HorizonInspector:
-    """The chosen robot's plan over the horizon at the shown instant (paper Fig. 5-7)."""
+    """The chosen robot's plan over the horizon at the shown instant (paper Fig. 5-7), in the
+    scene's colours: predicted / optimised purple and solid, references crimson and dashed,
+    the footstep plan grey."""
 
     def __init__(self, gui: Any):
         self.gui = gui
         self.robot = gui.add_dropdown("Robot", ("mpc",), initial_value="mpc")
         self.robot.on_update(lambda _e: self._invalidate())
         self.caption = gui.add_markdown("")
-        grey, black = "rgb(120,120,120)", "rgb(30,30,30)"
+        pred, ref, plan = css(PREDICTED), css(REFERENCE), css(PLAN)
         x_axis = viser.uplot.Series(label="t from now [s]")
-        empty = tuple(np.zeros(2, dtype=np.float32) for _ in range(5))
         self.com = gui.add_uplot(
-            data=empty,
-            title="Predicted CoM and planned feet, x from the CoM now [m] (eq. 25-26, 20-21)",
+            data=tuple(np.zeros(2, dtype=np.float32) for _ in range(4)),
+            title="Forward (x) from the CoM now [m]: predicted CoM (eq. 25-26), planned feet "
+            "(eq. 20-21)",
             series=(
                 x_axis,
-                viser.uplot.Series(label="CoM x", stroke="rgb(140,60,200)", width=2),
-                viser.uplot.Series(label="left foot x", stroke=black, width=1.5),
-                viser.uplot.Series(label="right foot x", stroke=grey, width=1.5, dash=(6, 4)),
-                viser.uplot.Series(label="CoM y", stroke="rgb(200,120,220)", width=1),
+                viser.uplot.Series(label="CoM x (predicted)", stroke=pred, width=2.5),
+                viser.uplot.Series(label="left foot x (plan)", stroke=css(MEASURED), width=1.5),
+                viser.uplot.Series(label="right foot x (plan)", stroke=plan, width=2, dash=(6, 4)),
             ),
             aspect=2.0,
         )
         self.zmp = gui.add_uplot(
-            data=tuple(np.zeros(2, dtype=np.float32) for _ in range(5)),
-            title="Predicted ZMP y with its reference and bounds [m] (eq. 16-18)",
+            data=tuple(np.zeros(2, dtype=np.float32) for _ in range(6)),
+            title="Sideways (y) [m]: predicted ZMP and CoM in the ZMP bounds (eq. 16-18, 25-26)",
             series=(
                 x_axis,
-                viser.uplot.Series(label="ZMP y", stroke="rgb(200,30,60)", width=2),
-                viser.uplot.Series(label="reference", stroke=black, width=1, dash=(6, 4)),
-                viser.uplot.Series(label="min", stroke=grey, width=1),
-                viser.uplot.Series(label="max", stroke=grey, width=1),
+                viser.uplot.Series(label="ZMP y (predicted)", stroke=pred, width=2.5),
+                viser.uplot.Series(label="CoM y (predicted)", stroke=css(PREDICTED, 0.45), width=2),
+                viser.uplot.Series(label="ZMP reference", stroke=ref, width=1.5, dash=(6, 4)),
+                viser.uplot.Series(label="min", stroke=plan, width=1),
+                viser.uplot.Series(label="max", stroke=plan, width=1),
             ),
             aspect=2.0,
         )
@@ -191,13 +251,12 @@ class HorizonInspector:
             title="Pelvic angle over the horizon [deg] (eq. 30-33, 35)",
             series=(
                 x_axis,
-                viser.uplot.Series(
-                    label="theta_ref (eq. 33)", stroke=black, width=1.5, dash=(6, 4)
-                ),
-                viser.uplot.Series(label="theta (MPC, eq. 35)", stroke="rgb(200,30,60)", width=2.5),
+                viser.uplot.Series(label="theta_ref (eq. 33)", stroke=ref, width=2, dash=(8, 5)),
+                viser.uplot.Series(label="theta (MPC, eq. 35)", stroke=pred, width=2.5),
             ),
             aspect=2.0,
         )
+        self.theta_note = gui.add_markdown("")
         self._key: tuple | None = None
         self._time = -math.inf
         self._scales: dict[str, tuple[float, float, float]] = {}
@@ -246,16 +305,11 @@ class HorizonInspector:
         f32 = np.float32
         x0 = float(r.com[0])  # forward positions from the measured CoM now: readable numbers
         com_x, left_x, right_x = h.com[:, 0] - x0, h.left_foot[:, 0] - x0, h.right_foot[:, 0] - x0
-        self.com.data = (
-            t,
-            com_x.astype(f32),
-            left_x.astype(f32),
-            right_x.astype(f32),
-            h.com[:, 1].astype(f32),
-        )
+        self.com.data = (t, com_x.astype(f32), left_x.astype(f32), right_x.astype(f32))
         self.zmp.data = (
             t,
             h.zmp[:, 1].astype(f32),
+            h.com[:, 1].astype(f32),
             h.zmp_ref[:, 1].astype(f32),
             h.zmp_lo[:, 1].astype(f32),
             h.zmp_hi[:, 1].astype(f32),
@@ -264,11 +318,16 @@ class HorizonInspector:
         theta_ref, theta = h.theta_ref * deg, h.theta * deg
         self.theta.data = (t, theta_ref.astype(f32), theta.astype(f32))
         horizon = float(h.t[-1])
-        self._scale(self.com, "com", horizon, [com_x, left_x, right_x, h.com[:, 1]], (-0.2, 0.6))
+        self._scale(self.com, "com", horizon, [com_x, left_x, right_x], (-0.2, 0.6))
         self._scale(
-            self.zmp, "zmp", horizon, [h.zmp[:, 1], h.zmp_lo[:, 1], h.zmp_hi[:, 1]], (-0.15, 0.15)
+            self.zmp,
+            "zmp",
+            horizon,
+            [h.zmp[:, 1], h.com[:, 1], h.zmp_lo[:, 1], h.zmp_hi[:, 1]],
+            (-0.15, 0.15),
         )
         self._scale(self.theta, "theta", horizon, [theta_ref, theta], (-10.0, 10.0))
+        self.theta_note.content = theta_note(r, theta, theta_ref)
         phase = (
             "double support"
             if r.in_dsp
@@ -278,3 +337,23 @@ class HorizonInspector:
             f"**{METHOD_INFO[r.method].title}** at t = {frame.clock:.2f} s ({phase}, step "
             f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples."
         )
+
+
+def theta_note(r: Any, theta: np.ndarray, theta_ref: np.ndarray) -> str:
+    """Why theta and theta_ref coincide (or not), from the weights in force, with the largest
+    difference over the horizon [deg]."""
+    if r.method != "mpc":
+        return (
+            "Only the MPC robot plans its pelvic angle: for this robot theta is the commanded "
+            "angle now, held over the horizon."
+        )
+    diff = float(np.max(np.abs(theta - theta_ref))) if len(theta) else math.nan
+    pel = r.params.pelvis
+    return (
+        f"Largest difference theta - theta_ref over the horizon: **{diff:.2f}°**. The MPC "
+        f"weighs tracking its reference by alpha_pel = {pel.alpha:g} and the yaw acceleration "
+        f"by beta_pel = {pel.beta:g} (eq. 37; the paper: 1 and 1e-10): with so small a "
+        "beta_pel, smoothing costs nearly nothing, so theta follows theta_ref closely and the "
+        "two lines lie on each other. Raise beta_pel (Pelvic MPC folder, e.g. to 1e-2) and "
+        "theta smooths and lags its reference."
+    )

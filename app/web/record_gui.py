@@ -1,5 +1,6 @@
 """The Record folder of one view's panel: the last seconds of the session as a zip that plays
-back without the server (:mod:`app.web.recording`), offered to the browser that asked.
+back without the server (:mod:`app.web.recording`), downloaded by the browser that asked (a
+file saved as any download is, not a link to click).
 
 The recording is made in viser's callback thread from what the session keeps (its frames and
 plot rows): the live loop runs on. The slider is bounded by the history a session keeps; if
@@ -52,8 +53,8 @@ class RecordFolder:
             self.result = gui.add_markdown("")
 
     def record(self, client: Any) -> bytes | None:
-        """Make the recording and send it to ``client`` (a download link appears at the top
-        left of its scene); returns the zip, or None with the reason shown in the folder."""
+        """Make the recording and send it to ``client`` as a file download; returns the zip,
+        or None with the reason shown in the folder."""
         session = self.panel.session
         asked = float(self.seconds.value)
         kept = recording.kept_seconds(session)
@@ -63,6 +64,10 @@ class RecordFolder:
             return None
         self.button.disabled = True
         self.button.label = "Recording..."
+        self.result.content = (
+            f"Drawing {seconds:.0f} s of the scene into a file: this takes a while; the "
+            "download starts by itself when it is made."
+        )
         t0 = time.perf_counter()
         try:
             rec = recording.from_session(session, seconds)
@@ -74,12 +79,12 @@ class RecordFolder:
             self.button.label = BUTTON
             self.button.disabled = False
         made = time.perf_counter() - t0
-        if client is not None:
-            client.send_file_download(f"{rec.name}.zip", data)
+        if client is not None:  # saved by the browser at once, not offered as a link
+            client.send_file_download(f"{rec.name}.zip", data, save_immediately=True)
         short = f" (only {kept:.1f} s were kept)" if asked > kept + recording.SLACK_S else ""
         self.result.content = (
             f"Recorded **{rec.duration:.1f} s** of {len(rec.methods)} robot"
             f"{'s' if len(rec.methods) != 1 else ''}{short}: {len(data) / 1e6:.1f} MB, made "
-            f"in {made:.1f} s. Save `{rec.name}.zip` with the link at the top left of the scene."
+            f"in {made:.1f} s, downloaded as `{rec.name}.zip` (your browser's downloads)."
         )
         return data

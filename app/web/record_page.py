@@ -8,8 +8,8 @@ import html
 import time
 from typing import TYPE_CHECKING
 
+from app.methods import METHOD_INFO
 from app.web.overlays import legend_html
-from controller.params import METHOD_INFO
 
 if TYPE_CHECKING:
     from app.web.recording import Recording

@@ -12,8 +12,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from app.live.history import COL
+from app.methods import METHOD_INFO, method_hex
 from app.web.plots import PLOTS
-from controller.params import METHOD_INFO, method_hex
 
 if TYPE_CHECKING:
     from app.web.recording import Recording

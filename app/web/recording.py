@@ -164,7 +164,18 @@ class HeadlessRecorder:
         if self._ticks % HISTORY_DECIMATION == 0:
             self.rows.append(self._row(session, t))
         if not self.frames or t - self.frames[-1].clock >= self.period - 1e-9:
-            robot = robot_frame(session, 0, t, self.method, int(session.fell), 0, None, False, None)
+            robot = robot_frame(
+                session,
+                0,
+                t,
+                self.method,
+                int(session.fell),
+                0,
+                None,
+                False,
+                None,
+                fell_clock=session.fall_time,
+            )
             self.frames.append(
                 LiveFrame(
                     seq=len(self.frames),
@@ -247,7 +258,7 @@ def scene_html(rec: Recording, layers: dict[str, bool] | None = None) -> str:
         RecorderBusy: another recording took the recorder longer than BUSY_WAIT_S.
     """
     from app.web.camera import camera_pose
-    from app.web.scene import SceneView
+    from app.web.scene import SceneView, stagger_x
 
     if not _lock.acquire(timeout=BUSY_WAIT_S):
         raise RecorderBusy("another recording is being made: try again in a moment")
@@ -258,7 +269,9 @@ def scene_html(rec: Recording, layers: dict[str, bool] | None = None) -> str:
         for key, on in (layers or {}).items():
             if key in view.layers:
                 view.set_layer(key, on)
-        pos, look, up, fov = camera_pose("follow", len(rec.methods), 16 / 9, False)
+        # fitted for the widest stagger of the recording (a robot lying where it fell)
+        stagger = max(stagger_x(f.robots) for f in rec.frames if f.robots)
+        pos, look, up, fov = camera_pose("follow", len(rec.methods), 16 / 9, False, stagger)
         server.initial_camera.position = tuple(pos)
         server.initial_camera.look_at = tuple(look)
         server.initial_camera.up = up

@@ -25,6 +25,8 @@ img { max-width: 100%; }
 pre { background: #f3f4f7; padding: 0.8em; overflow-x: auto; }
 code { background: #f3f4f7; padding: 0 3px; }
 nav a { margin-right: 1em; }
+.which { background: #eef4ff; border: 1px solid #c9d8f5; border-radius: 6px; padding: 6px 10px;
+         margin: 1em 0; font-size: 14px; }
 """
 _ABSOLUTE = re.compile(r"^[a-zA-Z][a-zA-Z0-9+.-]*:|^/|^#")  # scheme, absolute path, anchor
 _URL_ATTRS = {"image": "src", "link_open": "href"}
@@ -55,6 +57,7 @@ def _parser() -> MarkdownIt:
 
 
 _MD = _parser()
+_INLINE = MarkdownIt("commonmark", {"html": False})  # a line about the report: no raw HTML
 
 
 def markdown_to_html(md: str) -> str:
@@ -62,10 +65,12 @@ def markdown_to_html(md: str) -> str:
     return _MD.render(md)
 
 
-def render_report_page(report_dir: Path) -> str:
-    """The report as HTML, or a page saying how to generate it."""
+def render_report_page(report_dir: Path, about: str | None = None) -> str:
+    """The report as HTML, or a page saying how to generate it; ``about`` (which run it is,
+    :func:`app.report_dir.choose_report`) heads the page."""
     md_path = report_dir / "report.md"
     nav = '<nav><a href="/">Live tool</a><a href="/docs">API docs</a></nav>'
+    which = f'<p class="which"><b>Which report:</b> {markdown_inline(about)}</p>' if about else ""
     try:
         body = markdown_to_html(md_path.read_text(encoding="utf-8"))
     except (OSError, UnicodeDecodeError):
@@ -76,5 +81,10 @@ def render_report_page(report_dir: Path) -> str:
         )
     return (
         "<!doctype html><html><head><meta charset='utf-8'><title>pelvic-walk report"
-        f"</title><style>{_STYLE}</style></head><body>{nav}{body}</body></html>"
+        f"</title><style>{_STYLE}</style></head><body>{nav}{which}{body}</body></html>"
     )
+
+
+def markdown_inline(text: str) -> str:
+    """One line of Markdown (code spans) as HTML; raw HTML in it is escaped."""
+    return _INLINE.renderInline(text)

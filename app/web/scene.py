@@ -11,19 +11,22 @@ and colours: a capsule is a cylinder and two spheres), so a frame moves them wit
 (a sphere needs no orientation); each overlay is one handle for all robots; world-fixed
 overlays sit under one frame that follows the robots, so they are re-sent only when they
 change; overlays are refreshed at ``OVERLAY_HZ`` and labels at ``LABEL_HZ``. Each robot wears
-its method's colour (``METHOD_INFO``) on its torso and head; no other overlay uses the method
-colours.
+its method's colour (``app.methods.METHOD_INFO``) on its torso and head; the overlays use one
+colour per meaning (``app.web.overlays``), never a method colour.
 
 Layout: robot ``slot`` i of n walks at y = ((n - 1) / 2 - i) * ``ROBOT_SPACING``; the world
-(robots, overlays, floor) is shifted back in x by the robots' mean progress, so the robots
-stay in view while the footholds and the floor stay fixed to the ground.
+(robots, overlays, floor) is shifted back in x to the middle of the robots' progress (the
+middle between the hindmost and the foremost), so every robot stays in view, a fallen one
+lying behind the others included, while the footholds and the floor stay fixed to the ground.
+A fallen robot gets a red ring on the floor and a label saying when and why it fell and when
+the session restarts every robot (app.live.session.FALL_HOLD_S).
 
 The prediction (the paper's Fig. 5-6), drawn on the floor so the body does not hide it: the
 CoM the CoM MPC predicts over the horizon (eq. 25-26) as a purple path from the robot
-forward, and across it, at every other predicted sample, the pelvis's hip line, solid for the
-MPC's optimised angle theta (eq. 35) and dashed for the reference theta_ref (eq. 30-33).
-Only the MPC robot plans its pelvis; the redundancy robot shows its hip line now, the fixed
-one none.
+forward, and across it, at every fourth predicted sample, the pelvis's hip line: purple and
+solid for the MPC's optimised angle theta (eq. 35), crimson, dashed and longer for the
+reference theta_ref (eq. 30-33). Only the MPC robot plans its pelvis; the redundancy robot
+shows its hip line now, the fixed one none.
 """
 
 from __future__ import annotations
@@ -35,10 +38,12 @@ from typing import Any
 import numpy as np
 import viser
 
-from app.live import LiveFrame, RobotFrame
+from app.live import FALL_HOLD_S, LiveFrame, RobotFrame
 from app.live.history import FrameStore
+from app.methods import METHOD_INFO
 from app.web.camera import CAMERA_VIEWS, camera_pose, label_point, slot_offset
 from app.web.overlays import (
+    DANGER,
     EMPTY_SEG,
     FLOOR_Z,
     FOOTHOLD_WINDOW,
@@ -52,6 +57,7 @@ from app.web.overlays import (
     ZMP_REF,
     Overlay,
     colored,
+    fall_ring,
     polyline_segments,
     reach_color,
     rectangle_segments,
@@ -61,7 +67,6 @@ from app.web.overlays import (
     swing_path,
 )
 from app.web.robot_meshes import RobotMeshes
-from controller.params import METHOD_INFO
 from models.dyros_jet import FOOT_SIZE
 
 LAYERS: dict[str, tuple[str, bool]] = {  # key -> (GUI label, shown by default)
@@ -69,11 +74,12 @@ LAYERS: dict[str, tuple[str, bool]] = {  # key -> (GUI label, shown by default)
     "labels": ("Labels (method, status, numbers)", True),
     "prediction": ("Prediction: CoM path and hip lines (floor)", True),
     "footholds": ("Planned footholds", True),
-    "zmp": ("ZMP: reference (red) and measured (black)", True),
+    "zmp": ("ZMP: reference (crimson disc) and measured (black dot)", True),
     "support": ("Support polygon", False),
     "swing": ("Swing-foot path", False),
     "momentum": ("Yaw momentum arrow", True),
     "reach": ("Legs by reach (grey -> red: knee straightening)", True),
+    "falls": ("Fall marker (red ring)", True),
 }
 MOMENTUM_SCALE = 0.5  # [m per kg m^2/s] arrow length
 OVERLAY_HZ = 10.0  # overlay refreshes per second at most
@@ -112,6 +118,7 @@ class SceneView:
             "prediction": (PREDICTION, 3.0),
             "reach": (grey, 6.0),
             "sticks": (grey, 3.0),
+            "falls": (DANGER, 6.0),
         }
         self.ov = {
             k: Overlay(
@@ -146,8 +153,12 @@ class SceneView:
         self._keys: dict[str, Any] = {}
         self.camera_view = "follow"  # the last view asked for: how robots and labels lie
         self.version = 0  # changes when the layout changes: the shown frame is drawn again
+        self._stagger = 0.0  # [m] along x the cameras are fitted for (a robot lying behind)
+        self._placed: dict[Any, np.ndarray] = {}  # client id -> camera position set
+        self._initial: np.ndarray | None = None  # where a new browser's camera starts
         if isinstance(target, viser.ViserServer):
             pos, look, _up, fov = camera_pose("follow", 3, 1.3, False)
+            self._initial = np.asarray(pos, float)
             target.initial_camera.position = tuple(pos)
             target.initial_camera.look_at = tuple(look)
             target.initial_camera.fov = fov
@@ -178,13 +189,35 @@ class SceneView:
             aspect = client.camera.aspect
         except AssertionError:  # the browser has not reported its canvas yet
             aspect = 1.3
-        pos, look, up, fov = camera_pose(name, len(self._methods) or 3, aspect, self.along_x)
+        pos, look, up, fov = camera_pose(
+            name, len(self._methods) or 3, aspect, self.along_x, self._stagger
+        )
         self._keys.clear()
+        self._placed[client.client_id] = np.asarray(pos, float)
         with client.atomic():
             client.camera.up_direction = up
             client.camera.fov = fov
             client.camera.position = tuple(pos)
             client.camera.look_at = tuple(look)
+
+    def _refit(self, stagger: float) -> None:
+        """Fit the named view again for robots ``stagger`` [m] apart along x, for every
+        browser whose camera is still where the view put it (one the viewer turned or
+        zoomed is left alone)."""
+        self._stagger = stagger
+        clients = (
+            list(self.target.get_clients().values())
+            if isinstance(self.target, viser.ViserServer)
+            else [self.target]
+        )
+        for client in clients:
+            placed = self._placed.get(client.client_id, self._initial)
+            try:
+                here = np.asarray(client.camera.position, float)
+            except AssertionError:  # nothing reported yet
+                continue
+            if placed is not None and np.allclose(here, placed, atol=0.05):
+                self.set_camera(self.camera_view, client)
 
     @property
     def along_x(self) -> bool:
@@ -241,7 +274,10 @@ class SceneView:
                 for i in range(n)
             ]
         )  # (n, 2) each robot's offset in x, y
-        target = float(np.mean([r.com[0] for r in robots])) if self.follow else 0.0
+        stagger = stagger_x(robots)
+        if stagger != self._stagger:
+            self._refit(stagger)
+        target = follow_x(robots) if self.follow else 0.0
         jump = abs(target - self._follow_x) > 2.0 or frame.paused
         self._follow_x = target if jump else self._follow_x + 0.25 * (target - self._follow_x)
         now = time.monotonic()
@@ -258,7 +294,7 @@ class SceneView:
                 self._label_time = now
                 for r, yi, label in zip(robots, y, self.labels, strict=True):
                     label.set(
-                        text=_label_text(r),
+                        text=label_text(r, frame),
                         position=label_point(r.com[0], yi, r.slot, n, self.from_above),
                     )
 
@@ -290,13 +326,14 @@ class SceneView:
                 )
             )
         if on["prediction"]:
-            ov["prediction"].set(
+            pred_pts, pred_cols = colored(
+                [pair for r, yi in zip(robots, y, strict=True) for pair in robot_prediction(r, yi)]
+            )
+            ov["prediction"].set(points=pred_pts, colors=pred_cols)
+        if on["falls"]:
+            ov["falls"].set(
                 points=seg_array(
-                    [
-                        seg
-                        for r, yi in zip(robots, y, strict=True)
-                        for seg in robot_prediction(r, yi)
-                    ]
+                    [fall_ring(r, yi) for r, yi in zip(robots, y, strict=True) if r.fell]
                 )
             )
         if on["zmp"]:
@@ -346,12 +383,58 @@ class SceneView:
                 ov["sticks"].set(points=stick_pts, colors=stick_cols)
 
 
-def _label_text(r: RobotFrame) -> str:
-    """Method, status badge and live numbers, above the robot."""
-    reach = r.reach
+STAGGER_STEP = 0.5  # [m] the cameras are fitted again when the robots' stagger crosses these
+
+
+def robot_xs(robots: tuple[RobotFrame, ...]) -> list[float]:
+    """[m] each robot's forward position: a walking robot's CoM, a fallen one's middle."""
+    return [
+        (float(r.body_xpos[1:, 0].min()) + float(r.body_xpos[1:, 0].max())) / 2
+        if r.fell
+        else float(r.com[0])
+        for r in robots
+    ]
+
+
+def follow_x(robots: tuple[RobotFrame, ...]) -> float:
+    """[m] where the view centres in x: the middle between the hindmost and the foremost
+    robot, so that all stay in view. (The slots' own offsets, along x seen from the side, are
+    laid out around it.)"""
+    xs = robot_xs(robots)
+    return (min(xs) + max(xs)) / 2
+
+
+def stagger_x(robots: tuple[RobotFrame, ...]) -> float:
+    """[m] how far apart along x the robots are, rounded up to STAGGER_STEP (0 while they
+    walk abreast): what the cameras are fitted for (``camera_pose``'s ``stagger_x``)."""
+    xs = robot_xs(robots)
+    spread = max(xs) - min(xs)
+    return 0.0 if spread < 0.3 else STAGGER_STEP * math.ceil(spread / STAGGER_STEP)
+
+
+def label_text(r: RobotFrame, frame: LiveFrame) -> str:
+    """Method, status badge and live numbers, above the robot; when it fell, when and why,
+    and when the session restarts every robot."""
     head = METHOD_INFO[r.method].title
+    if r.fell:
+        when = f" at t = {r.fell_clock:.1f} s" if r.fell_clock is not None else ""
+        why = (r.fall_reason or "fell").replace(" deg", "°")
+        if r.fell_clock is None:
+            restart = "all robots restart soon"
+        else:
+            left = r.fell_clock + FALL_HOLD_S - frame.clock
+            restart = (
+                "all robots restart when you resume"
+                if frame.paused and left <= 0
+                else f"all robots restart in {max(left, 0.0):.1f} s"
+                + (" of running" if frame.paused else "")
+            )
+        return f"⚠ {head} FELL{when}\n{why}\n{restart}"
     if r.waiting:
         return f"{head}\nstanding by to start in phase"
+    if r.finished:
+        return f"{head} · walked its whole plan\nall robots restart together"
+    reach = r.reach
     return (
         f"{head} · {r.status}\nstep {max(r.step_index, 0)} · {r.step_length:.2f} m · "
         f"waist {math.degrees(r.waist_angle):+.0f}°\nreach left {reach[0]:.2f} · right "

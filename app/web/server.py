@@ -16,7 +16,10 @@ short, the robots keep real time and the
 scene is sent a little later, instead of every viewer slowing the robots down.
 
 ``--sessions shared`` (the default) shows one session to every browser; ``--sessions private``
-gives each browser its own while the workers have room (``--robots-per-worker``).
+gives each browser its own while the workers have room (``--robots-per-worker``), beside the
+shared demo unless ``--no-shared-demo``. ``--instructor-token`` puts one person in charge of
+the shared demo (:mod:`app.web.auth`); the web server's access log stays off, so no URL (and no
+``?token=``) is logged.
 
 viser silently takes the next free port when its port is busy, so :func:`serve` checks
 ``get_port()`` and stops with one clear line (exit status 2); the FastAPI port is checked
@@ -40,6 +43,7 @@ from app.live.pool import WorkerPool
 from app.live.registry import SessionRegistry
 from app.live.session import initial_intent
 from app.web.api import create_app
+from app.web.auth import Instructor, redact_logs
 from app.web.settings import Settings, worker_layout
 from app.web.view import Display
 
@@ -95,6 +99,8 @@ def serve(
     display_hz: float | None = None,
     idle_timeout: float | None = None,
     methods: list[str] | None = None,
+    shared_demo: bool | None = None,
+    instructor_token: str | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
@@ -114,11 +120,13 @@ def serve(
         "robots_per_worker": robots_per_worker,
         "display_hz": display_hz,
         "idle_timeout": idle_timeout,
+        "shared_demo": shared_demo,
+        "instructor_token": instructor_token,
     }
     try:  # the command line over the environment over the defaults, checked in one place
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
     except ValidationError as exc:
-        err = exc.errors()[0]
+        err = exc.errors()[0]  # (its "input", which may be a token, is never printed)
         return _fail(f"--{'-'.join(map(str, err['loc'])).replace('_', '-')}: {err['msg']}")
     host, port, viser_port = settings.host, settings.port, settings.viser_port
     report_dir, sessions = settings.report_dir, settings.sessions
@@ -129,8 +137,12 @@ def serve(
         return _fail(f"--port and --viser-port must differ (both {port})")
     if sessions == "private" and workers < 1:
         return _fail("--sessions private needs worker processes (--workers 1 or more)")
+    if not settings.shared_demo and sessions != "private":
+        return _fail("--no-shared-demo needs --sessions private (else nothing would run)")
+    secret = settings.instructor_token
+    instructor = Instructor(secret.get_secret_value() if secret is not None else None)
     intent = initial_intent(methods=methods) if methods else initial_intent()
-    if workers and len(intent.methods) > workers * robots_per_worker:
+    if settings.shared_demo and workers and len(intent.methods) > workers * robots_per_worker:
         return _fail(
             f"{workers} worker(s) x {robots_per_worker} robot(s) cannot hold the"
             f" {len(intent.methods)} robots of the demo; give more --workers or"
@@ -147,23 +159,32 @@ def serve(
         return _fail(f"port {viser_port} on {host} is in use; choose another with --viser-port")
 
     pool = WorkerPool(workers, robots_per_worker, display_hz).start() if workers else None
-    registry = SessionRegistry.start(sessions, intent, pool, idle_timeout)
-    display = Display(viser_server, registry, display_hz).start()
+    registry = SessionRegistry.start(
+        sessions, intent, pool, idle_timeout, shared_demo=settings.shared_demo
+    )
+    display = Display(viser_server, registry, display_hz, instructor).start()
     app = create_app(
-        registry, viser_port=viser_port, report_dir=report_dir, health_extra=display.health
+        registry,
+        viser_port=viser_port,
+        report_dir=report_dir,
+        health_extra=display.health,
+        instructor=instructor,
     )
     if pool is not None:
         # the main thread (uvicorn, and the API's worker threads it starts) keeps its
         # priority: the HTTP API is light and must answer promptly
         keep = pool.receiver_thread_ids() | {threading.get_native_id()}
         lower_priority(settings.display_nice, keep=keep)
-    config = uvicorn.Config(app, host=host, port=port, log_level="warning")
+    redact_logs()  # a URL with ?token= never reaches a log (the access log is off anyway)
+    config = uvicorn.Config(app, host=host, port=port, log_level="warning", access_log=False)
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host
+    demo = "" if settings.shared_demo else ", no shared demo"
+    teacher = "; instructor: open the page with ?token=<your token>" if instructor.enabled else ""
     print(
         f"pelvic-walk: open http://{shown}:{port}/  (3-D scene: http://{shown}:{viser_port}/,"
         f" API docs: http://{shown}:{port}/docs); {workers} worker process"
-        f"{'es' if workers != 1 else ''}, {sessions} sessions; Ctrl-C to stop",
+        f"{'es' if workers != 1 else ''}, {sessions} sessions{demo}{teacher}; Ctrl-C to stop",
         flush=True,
     )
     status = 0

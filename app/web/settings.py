@@ -3,8 +3,10 @@
 
 ``PELVIC_WALK_HOST``, ``PELVIC_WALK_PORT``, ``PELVIC_WALK_VISER_PORT``,
 ``PELVIC_WALK_REPORT_DIR``, ``PELVIC_WALK_WORKERS``, ``PELVIC_WALK_SESSIONS``,
-``PELVIC_WALK_ROBOTS_PER_WORKER``, ``PELVIC_WALK_DISPLAY_HZ``, ``PELVIC_WALK_DISPLAY_NICE``
-and ``PELVIC_WALK_IDLE_TIMEOUT`` override the defaults; command-line options override both.
+``PELVIC_WALK_ROBOTS_PER_WORKER``, ``PELVIC_WALK_DISPLAY_HZ``, ``PELVIC_WALK_DISPLAY_NICE``,
+``PELVIC_WALK_IDLE_TIMEOUT``, ``PELVIC_WALK_SHARED_DEMO`` and ``PELVIC_WALK_INSTRUCTOR_TOKEN``
+override the defaults; command-line options override both. (The environment keeps the token
+out of the process list, where ``--instructor-token`` shows.)
 """
 
 from __future__ import annotations
@@ -13,7 +15,7 @@ import os
 from pathlib import Path
 from typing import Literal
 
-from pydantic import Field, field_validator
+from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 ROBOTS_PER_CORE = 2  # a core holds about two robots at 1.0x (`pelvic-walk bench`)
@@ -59,6 +61,18 @@ class Settings(BaseSettings):
     # how much lower than the workers the web and display threads run (Linux nice steps): when
     # the cores are short, the robots keep real time and the scene updates less often
     display_nice: int = Field(default=15, ge=0, le=19)
+    # private mode: run the shared demo (it holds its robots' worker slots) or not (every slot
+    # for the students' private sessions)
+    shared_demo: bool = True
+    # with it, only the instructor (the page opened with ?token=..., the API with
+    # "Authorization: Bearer ...") changes the shared demo; SecretStr: never printed
+    instructor_token: SecretStr | None = Field(default=None, min_length=1)
+
+    @field_validator("instructor_token", mode="before")
+    @classmethod
+    def _empty_token_is_none(cls, value: object) -> object:
+        """``PELVIC_WALK_INSTRUCTOR_TOKEN=`` (empty) means no instructor."""
+        return None if value == "" else value
 
     @field_validator("report_dir", mode="before")
     @classmethod

@@ -2,9 +2,14 @@
 
 - In ``shared`` mode there is one view on the viser server itself: every browser sees the same
   scene and GUI, and every control acts on the shared session.
+- With an instructor (``serve --instructor-token``), each browser gets its own view of the
+  shared session (viser's per-client scene and GUI): the instructor's (the page opened with
+  ``?token=``) drives it, the students' are read-only, with a line saying so.
 - In ``private`` mode each browser gets its own view (viser's per-client scene and GUI) on its
   own session, opened when it connects and ended when it disconnects (freeing its worker).
-  When the workers are full, the browser's view shows the shared demo with a one-line notice.
+  When the workers are full, the browser's view shows the shared demo with a one-line notice
+  (read-only with an instructor), or, without a shared demo, only that notice. With an
+  instructor, the instructor's browser gets the shared demo instead of a private session.
 
 The display thread draws each view's *shown* frame (the latest, or the sought one while
 paused) at most ``hz`` times a second and only when something changed, so the viewers are
@@ -23,6 +28,7 @@ import mujoco
 from app.live.pool import PoolFull
 from app.live.registry import SessionRegistry
 from app.live.session import SessionView
+from app.web.auth import Instructor, client_token
 from app.web.panel import ControlPanel
 from app.web.scene import SceneView
 from models.dyros_jet import SCENE_XML
@@ -41,11 +47,13 @@ class View:
         session: SessionView,
         registry: SessionRegistry,
         notice: str | None = None,
+        read_only: bool = False,
     ):
         self.target = target
         self.session = session
         self.registry = registry
         self.notice = notice
+        self.read_only = read_only  # a student watching the instructor's demo
         model = mujoco.MjModel.from_xml_path(str(SCENE_XML))  # only read for its shapes
         self.scene = SceneView(target, model)
         self.panel = ControlPanel(target.gui, self)
@@ -80,18 +88,38 @@ class View:
         self.draws += 1
 
 
+class NoticeOnly:
+    """A browser's view with nothing to show but a notice (the workers are full and no
+    shared demo runs)."""
+
+    def __init__(self, client: Any, notice: str):
+        self.target = client
+        client.gui.configure_theme(dark_mode=False, show_logo=False, show_share_button=False)
+        client.gui.add_markdown(notice)
+
+    def draw(self, now: float) -> None:
+        """Nothing moves."""
+
+
 class Display:
     """Views for the viewers and the thread that draws them."""
 
-    def __init__(self, server: Any, registry: SessionRegistry, hz: float = DISPLAY_HZ):
+    def __init__(
+        self,
+        server: Any,
+        registry: SessionRegistry,
+        hz: float = DISPLAY_HZ,
+        instructor: Instructor | None = None,
+    ):
         self.server = server
         self.registry = registry
+        self.instructor = instructor or Instructor(None)
         self.period = 1.0 / hz
         self.hz = hz
         self._lock = threading.Lock()
-        self.views: dict[Any, View] = {}
+        self.views: dict[Any, View | NoticeOnly] = {}
         self.refused = 0  # browsers told the workers were full
-        if registry.mode == "shared":
+        if registry.mode == "shared" and not self.instructor.enabled:
             self.views[None] = View(server, registry.shared, registry)
         else:
             server.on_client_connect(self._connect)
@@ -99,26 +127,43 @@ class Display:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
 
-    # -- private mode: one view per browser --------------------------------------------------
+    # -- one view per browser (private sessions, or an instructor) ---------------------------
     def _connect(self, client: Any) -> None:
         owner = str(client.client_id)
-        notice = None
+        registry, instructor = self.registry, self.instructor
+        drives = instructor.is_token(client_token(self.server, client))
+        notice, read_only = None, False
         try:
-            _sid, session = self.registry.open_private(owner=owner)
-        except PoolFull:
-            self.refused += 1
-            n = self.registry.count_private()
-            session = self.registry.shared
-            notice = (
-                f"**{n} private sessions run, as many as the workers hold**: you are "
-                "watching the shared demo (your changes act on it too)."
-            )
-        try:
-            view = View(client, session, self.registry, notice)
+            if registry.mode == "shared" or (drives and registry.has_shared):
+                session = registry.shared
+                read_only = not drives
+                if drives:
+                    notice = "**Instructor**: you drive the shared demo every student watches."
+            else:
+                try:
+                    _sid, session = registry.open_private(owner=owner)
+                except PoolFull:
+                    self.refused += 1
+                    n = registry.count_private()
+                    full = f"**{n} private sessions run, as many as the workers hold**"
+                    if not registry.has_shared:
+                        self._add(
+                            client, NoticeOnly(client, f"{full}: reload this page when one ends.")
+                        )
+                        return
+                    session = registry.shared
+                    read_only = instructor.enabled
+                    notice = f"{full}: you are watching the shared demo" + (
+                        "." if read_only else " (your changes act on it too)."
+                    )
+            view = View(client, session, registry, notice, read_only=read_only)
         except Exception:  # noqa: BLE001 - a browser that left while its view was built
             log.exception("could not build the view of client %s", owner)
-            self.registry.close_owned_by(owner)
+            registry.close_owned_by(owner)
             return
+        self._add(client, view)
+
+    def _add(self, client: Any, view: View | NoticeOnly) -> None:
         with self._lock:
             self.views[client.client_id] = view
 

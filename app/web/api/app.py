@@ -11,13 +11,14 @@ from fastapi.exceptions import RequestValidationError
 
 from app.live.registry import SessionRegistry
 from app.live.session import SessionView
-from app.report_dir import latest_report_dir
+from app.report_dir import ReportChoice, choose_report
 from app.web.api.edges import finite, router, validation_handler
 from app.web.api.live import session_router
 from app.web.api.pages import mount_docs_assets, pages_router
 from app.web.api.recording import recording_router
 from app.web.api.runs import RunManager, runs_router
 from app.web.api.sessions import resolvers, sessions_router
+from app.web.auth import Instructor
 from controller.params import GROUPS, ControllerParams, spec
 
 
@@ -27,6 +28,7 @@ def create_app(
     runs: RunManager | None = None,
     report_dir: Path | None = None,
     health_extra: Callable[[], dict[str, Any]] | None = None,
+    instructor: Instructor | None = None,
 ) -> FastAPI:
     """The app around the server's sessions (started and stopped by the caller).
 
@@ -34,10 +36,14 @@ def create_app(
         live: the sessions (a registry), or one session served as the shared one.
         viser_port: where the page finds the 3-D scene.
         runs: the headless-run manager (default: a new one).
-        report_dir: what ``/report`` serves; None looks up the latest report that
-            ``pelvic-walk experiments`` wrote at each request.
+        report_dir: what ``/report`` serves (``serve --report DIR``); None: the latest
+            report this user's ``pelvic-walk experiments`` wrote outside temporary folders,
+            looked up at each request, else the reference report
+            (:func:`app.report_dir.choose_report`).
         health_extra: more fields for ``GET /api/health`` (e.g. the display's state).
+        instructor: with a token, only its bearer changes the shared session.
     """
+    instructor = instructor or Instructor(None)
     registry = live if isinstance(live, SessionRegistry) else SessionRegistry.around(live)
     runs = runs or RunManager()
     app = FastAPI(
@@ -51,8 +57,8 @@ def create_app(
         redoc_url=None,
     )
     app.state.registry = registry
-    app.state.live = registry.shared
     app.state.runs = runs
+    app.state.instructor = instructor
     app.state.viser_port = viser_port
     app.add_exception_handler(RequestValidationError, validation_handler)  # type: ignore[arg-type]
 
@@ -61,21 +67,24 @@ def create_app(
     @health.get("/health")
     def get_health() -> dict[str, Any]:
         """``ok`` while every session's loop runs; workers and their deaths, if any."""
-        shared = registry.shared
-        frame = shared.frame()
+        shared = registry.shared if registry.has_shared else None
+        frame = shared.frame() if shared is not None else None
         pool = registry.pool
         deaths = [d.describe() for d in pool.deaths[-5:]] if pool is not None else []
         workers = pool.workers() if pool is not None else []
-        healthy = shared.running and shared.error is None and all(w["alive"] for w in workers)
+        shared_ok = shared is None or (shared.running and shared.error is None)
+        healthy = shared_ok and all(w["alive"] for w in workers)
         out = {
             "status": "ok" if healthy else "degraded",
-            "live_running": shared.running,
-            "live_error": shared.error,
+            "live_running": shared.running if shared is not None else None,
+            "live_error": shared.error if shared is not None else None,
             "frame_seq": frame.seq if frame else None,
             "realtime_factor": frame.realtime_factor if frame else None,
             "viser_port": viser_port,
             "sessions_mode": registry.mode,
-            "sessions": 1 + registry.count_private(),
+            "shared_demo": shared is not None,
+            "instructor": instructor.enabled,
+            "sessions": int(shared is not None) + registry.count_private(),
             "workers": workers,
             "worker_deaths": deaths,
         }
@@ -91,16 +100,19 @@ def create_app(
         return finite({g: spec(getattr(defaults, g)) for g in GROUPS})
 
     by_header, by_path = resolvers(registry)
-    reports = (lambda: report_dir) if report_dir is not None else latest_report_dir
+
+    def reports() -> ReportChoice:
+        return choose_report(report_dir)
+
     for r in (
         health,
-        session_router("/api", by_header),
+        session_router("/api", by_header, instructor),
         sessions_router(registry),
-        session_router("/api/sessions/{sid}", by_path),
+        session_router("/api/sessions/{sid}", by_path, instructor),
         recording_router("/api", by_header),
         recording_router("/api/sessions/{sid}", by_path),
         runs_router(runs),
-        pages_router(app, viser_port, reports),
+        pages_router(app, viser_port, reports, instructor),
     ):
         app.include_router(r)
     mount_docs_assets(app)

@@ -3,6 +3,11 @@
 Thin: each route writes intent (and waits until the loop has carried it out) or reads the
 frame the displays show. The same routes serve ``/api/...`` (the shared session, or the one
 named by the ``X-Pelvic-Session`` header) and ``/api/sessions/{sid}/...``.
+
+Paused, speed, the instant shown and the kept range come from the session's one account of
+its playback (:meth:`~app.live.session.SessionView.playback`), as in the panel and
+``GET /api/sessions``. With an instructor (``serve --instructor-token``), a route that changes
+the shared session needs ``Authorization: Bearer <token>``: 401 without, 403 with a wrong one.
 """
 
 from __future__ import annotations
@@ -12,8 +17,10 @@ from collections.abc import Callable
 from typing import Any
 
 from fastapi import APIRouter, Depends, HTTPException, Query
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
 from app.live.frames import LiveFrame
+from app.live.registry import SHARED
 from app.live.session import SessionView
 from app.web.api.edges import conflict, finite, router, unprocessable
 from app.web.api.models import (
@@ -28,6 +35,7 @@ from app.web.api.models import (
     params_dict,
     updates,
 )
+from app.web.auth import Instructor
 
 # How long a handler waits for the loop to take its intent before answering anyway (a
 # playback answer then says "applied": false): well under the 5 s clients often default to
@@ -45,7 +53,8 @@ def _shown(session: SessionView) -> LiveFrame:
 def state_of(sid: str, session: SessionView) -> dict[str, Any]:
     """``GET /api/state``: the shown frame of every robot, the clock and what is kept."""
     frame = _shown(session)
-    span = session.frames.span()
+    playback = session.playback()
+    span = playback.kept
     robots = [
         {
             "method": r.method,
@@ -56,6 +65,8 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
             "status": r.status,
             "fell": r.fell,
             "fall_reason": r.fall_reason,
+            "fell_at": r.fell_clock,
+            "finished": r.finished,
             "waiting": r.waiting,
             "success": r.last_walk_success,
             "walks_completed": r.walks_completed,
@@ -77,17 +88,18 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
             "session": sid,
             "seq": frame.seq,
             "clock": frame.clock,
-            "shown_t": session.shown_clock,
+            "shown_t": playback.shown_t,
+            "present": playback.present,
             "kept": {
                 "start": span[0] if span else None,
                 "end": span[1] if span else None,
                 "frames": len(session.frames),
                 "megabytes": round(session.frames.nbytes() / 1e6, 2),
             },
-            "paused": frame.paused,
-            "speed": frame.speed,
-            "realtime_factor": frame.realtime_factor,
-            "compute_realtime_factor": frame.compute_realtime_factor,
+            "paused": playback.paused,
+            "speed": playback.speed,
+            "realtime_factor": playback.realtime_factor,
+            "compute_realtime_factor": playback.compute_realtime_factor,
             "robots": robots,
         }
     )
@@ -130,11 +142,54 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
     )
 
 
-def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]]) -> APIRouter:
+_BEARER = HTTPBearer(
+    auto_error=False,
+    description="With an instructor (serve --instructor-token), changing the shared session "
+    "needs the token as a bearer credential; reading needs nothing.",
+)
+
+
+def instructor_check(
+    instructor: Instructor, resolve: Callable[..., tuple[str, SessionView]]
+) -> Callable[..., tuple[str, SessionView]]:
+    """A FastAPI dependency: the session to change, once the caller may change it (anyone,
+    unless an instructor drives the shared session: then its token)."""
+
+    session, bearer = Depends(resolve), Depends(_BEARER)
+
+    def writable(
+        s: tuple[str, SessionView] = session,
+        credentials: HTTPAuthorizationCredentials | None = bearer,
+    ) -> tuple[str, SessionView]:
+        if not instructor.enabled or s[0] != SHARED:
+            return s
+        if credentials is None:
+            raise HTTPException(
+                401,
+                detail="the instructor drives the shared session: send the header "
+                "'Authorization: Bearer <instructor token>' to change it (students: open a "
+                "private session with POST /api/sessions, or watch)",
+                headers={"WWW-Authenticate": "Bearer"},
+            )
+        if not instructor.is_token(credentials.credentials):
+            raise HTTPException(
+                403, detail="wrong instructor token: the shared session was not changed"
+            )
+        return s
+
+    return writable
+
+
+def session_router(
+    prefix: str,
+    resolve: Callable[..., tuple[str, SessionView]],
+    instructor: Instructor | None = None,
+) -> APIRouter:
     """The session-scoped routes under ``prefix``; ``resolve`` is a FastAPI dependency
-    returning (session id, session)."""
+    returning (session id, session); changes go through :func:`instructor_check`."""
     r = router(prefix, "live session")
     Session = Depends(resolve)
+    Writable = Depends(instructor_check(instructor or Instructor(None), resolve))
 
     def _playback(session: SessionView, action: Callable[[], Any]) -> dict[str, Any]:
         try:
@@ -159,7 +214,7 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
     @r.put("/params", response_model=ParamsModel, tags=["params"])
     def put_params(
         body: ParamsUpdate,  # type: ignore[valid-type]
-        s: tuple[str, SessionView] = Session,
+        s: tuple[str, SessionView] = Writable,
     ) -> dict[str, Any]:
         """Change some parameters (others keep their value): gains act on the next tick,
         walking parameters from the next step."""
@@ -175,23 +230,23 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
         return params_dict(intent.params, intent.methods)
 
     @r.post("/sim/pause", tags=["playback"])
-    def pause(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def pause(s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
         """Stop the clock (the robots hold still)."""
         return _playback(s[1], s[1].pause)
 
     @r.post("/sim/resume", tags=["playback"])
-    def resume(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def resume(s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
         """Run again, from the present (a sought instant is left)."""
         return _playback(s[1], s[1].resume)
 
     @r.post("/sim/reset", tags=["playback"])
-    def reset(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def reset(s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
         """Restart every robot from standing (t = 0), all together."""
         return _playback(s[1], s[1].reset)
 
     @r.post("/sim/step", tags=["playback"])
     def step(
-        body: StepRequest | None = None, s: tuple[str, SessionView] = Session
+        body: StepRequest | None = None, s: tuple[str, SessionView] = Writable
     ) -> dict[str, Any]:
         """Pause and advance one control period (5 ms), or to the next lift-off or landing
         (``{"until": "liftoff"}``) of the first walking robot."""
@@ -199,11 +254,11 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
         return _playback(s[1], lambda: s[1].step(until))
 
     @r.put("/sim/speed", tags=["playback"])
-    def put_speed(body: SpeedRequest, s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def put_speed(body: SpeedRequest, s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
         return _playback(s[1], lambda: s[1].set_speed(body.speed))
 
     @r.post("/sim/seek", response_model=StateResponse, tags=["playback"])
-    def seek(body: SeekRequest, s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def seek(body: SeekRequest, s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
         """When paused, show the kept instant nearest to ``t`` [s of session clock] in the
         scene, the horizon inspector and the plots; ``GET /api/state`` reports it."""
         sid, session = s
@@ -216,7 +271,7 @@ def session_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]])
         return state_of(sid, session)
 
     @r.post("/sim/push", tags=["playback"])
-    def push(body: PushRequest, s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+    def push(body: PushRequest, s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
         """Push one robot's torso horizontally (MuJoCo ``xfrc_applied``) for ``duration`` s.
         Nothing re-plans the footsteps: the CoM MPC re-plans from the measured state."""
         return _playback(s[1], lambda: s[1].push(body.method, body.force, body.duration))

@@ -164,7 +164,12 @@ class RobotState(BaseModel):
     status: str = Field(description="clean / knee nearly straight / IK at the speed limit / fell")
     fell: bool
     fall_reason: str | None
-    waiting: bool = Field(description="restarted, standing by to start in phase")
+    fell_at: float | None = Field(
+        description="session clock of the fall [s]: the robot lies where it fell until the "
+        "session restarts every robot, a few seconds later"
+    )
+    finished: bool = Field(description="walked its whole plan (all robots restart then)")
+    waiting: bool = Field(description="built late, standing by to start in phase")
     success: bool | None = Field(description="outcome of the last finished (or failed) walk")
     walks_completed: int
     falls: int
@@ -196,8 +201,9 @@ class StateResponse(BaseModel):
         description="session clock of the instant shown while paused and sought (POST "
         "/api/sim/seek); null when showing the present"
     )
-    kept: KeptRange
-    paused: bool
+    present: float | None = Field(description="session clock of the newest frame [s]")
+    kept: KeptRange = Field(description="what is kept: the timeline's range")
+    paused: bool = Field(description="as asked (the panel and GET /api/sessions say the same)")
     speed: float
     realtime_factor: float | None = Field(description="simulated / wall time, last seconds")
     compute_realtime_factor: float | None = Field(

@@ -3,27 +3,58 @@
 The page, the reference report and the docs' scripts are read from installed packages
 (``app.static``, ``app.reference_report``, ``fastapi_offline``), never from the checkout, so
 a wheel installed anywhere serves them, and ``/docs`` needs no internet.
+
+With an instructor, ``/?token=T`` (the right token) frames the scene with the token in its
+websocket address, so the display knows that browser drives the shared demo
+(:mod:`app.web.auth`); every other browser reads that the instructor drives it.
 """
 
 from __future__ import annotations
 
+import html
 from collections.abc import Callable
-from pathlib import Path
+from urllib.parse import quote
 
 from fastapi import APIRouter, FastAPI, Request
 from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
-from app.report_dir import package_dir
+from app.live.session import FALL_HOLD_S
+from app.methods import METHOD_INFO
+from app.report_dir import ReportChoice, package_dir
 from app.web.api.edges import file_under, router
+from app.web.auth import TOKEN_PARAM, Instructor
+from app.web.overlays import MEASURED, PREDICTED, REFERENCE
 from app.web.report_page import render_report_page
 
 DOCS_ASSETS = "/docs-assets"  # swagger-ui / redoc files of the fastapi-offline package
 
 
-def pages_router(app: FastAPI, viser_port: int, report_dir: Callable[[], Path]) -> APIRouter:
+COLOURS = {  # {{COLOR_<name>}} in the page: the scene's colours, from their one definition
+    **{m: info.color for m, info in METHOD_INFO.items()},
+    "predicted": PREDICTED,
+    "reference": REFERENCE,
+    "measured": MEASURED,
+}
+ROLES = {  # the line the page shows under its title, by role
+    "": "",
+    "instructor": "<p class='role'><b>Instructor</b>: you drive the shared demo; every "
+    "student watches what you do.</p>",
+    "student": "<p class='role'>The <b>instructor</b> drives the shared demo: watch it here "
+    "(your controls for it are off).</p>",
+    "wrong": "<p class='role'><b>That instructor token is wrong</b>: you watch as a student.</p>",
+}
+
+
+def pages_router(
+    app: FastAPI,
+    viser_port: int,
+    report: Callable[[], ReportChoice],
+    instructor: Instructor | None = None,
+) -> APIRouter:
     static_dir = package_dir("app.static")
+    instructor = instructor or Instructor(None)
     r = router()
 
     @r.get("/", response_class=HTMLResponse, include_in_schema=False)
@@ -31,17 +62,36 @@ def pages_router(app: FastAPI, viser_port: int, report_dir: Callable[[], Path]) 
         host = request.url.hostname or "127.0.0.1"
         if ":" in host:  # IPv6 literal
             host = f"[{host}]"
+        viser_url = f"http://{host}:{viser_port}/"
+        scene_url, role = viser_url, ""
+        if instructor.enabled:
+            token = request.query_params.get(TOKEN_PARAM)
+            if instructor.is_token(token):
+                assert token is not None
+                # viser's client takes its websocket address from this parameter: the display
+                # reads the token back when the browser connects
+                ws = f"ws://{host}:{viser_port}/?{TOKEN_PARAM}={quote(token, safe='')}"
+                scene_url = f"{viser_url}?websocket={quote(ws, safe='')}"
+                role = "instructor"
+            else:
+                role = "wrong" if token else "student"
         page = (static_dir / "index.html").read_text(encoding="utf-8")
-        page = page.replace("{{VISER_URL}}", f"http://{host}:{viser_port}/")
-        return HTMLResponse(page)
+        page = page.replace("{{SCENE_URL}}", html.escape(scene_url, quote=True))
+        page = page.replace("{{VISER_URL}}", viser_url)
+        page = page.replace("{{ROLE}}", ROLES[role])
+        page = page.replace("{{FALL_HOLD_S}}", f"{FALL_HOLD_S:g}")
+        for name, rgb in COLOURS.items():
+            page = page.replace(f"{{{{COLOR_{name}}}}}", "rgb({},{},{})".format(*rgb))
+        return HTMLResponse(page, headers={"Cache-Control": "no-store"})
 
     @r.get("/report", response_class=HTMLResponse, include_in_schema=False)
-    def report() -> HTMLResponse:
-        return HTMLResponse(render_report_page(report_dir()))
+    def report_page() -> HTMLResponse:
+        choice = report()
+        return HTMLResponse(render_report_page(choice.path, choice.about))
 
     @r.get("/report/{path:path}", include_in_schema=False)
     def report_file(path: str) -> FileResponse:
-        return FileResponse(file_under(report_dir(), path))
+        return FileResponse(file_under(report().path, path))
 
     @r.get("/static/{path:path}", include_in_schema=False)
     def static_file(path: str) -> FileResponse:

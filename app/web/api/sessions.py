@@ -13,7 +13,13 @@ from typing import Any
 from fastapi import APIRouter, Header, HTTPException, Path
 
 from app.live.pool import PoolFull
-from app.live.registry import SHARED, NoSuchSession, SessionRegistry, SessionsDisabled
+from app.live.registry import (
+    NO_SHARED,
+    SHARED,
+    NoSuchSession,
+    SessionRegistry,
+    SessionsDisabled,
+)
 from app.live.session import SessionView
 from app.web.api.edges import conflict, finite, router
 
@@ -27,6 +33,8 @@ def resolvers(registry: SessionRegistry):
         try:
             return sid or SHARED, registry.get(sid)
         except NoSuchSession:
+            if (sid or SHARED) == SHARED:
+                raise HTTPException(404, detail=NO_SHARED) from None
             raise HTTPException(
                 404, detail=f"no session {sid!r}: GET /api/sessions lists them"
             ) from None
@@ -56,6 +64,7 @@ def sessions_router(registry: SessionRegistry) -> APIRouter:
         return finite(
             {
                 "mode": registry.mode,
+                "shared_demo": registry.has_shared,
                 "sessions": registry.list(),
                 "private_sessions": registry.count_private(),
                 "robot_slots_free": registry.capacity_private,

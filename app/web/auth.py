@@ -1,0 +1,104 @@
+"""Instructor mode: with ``serve --instructor-token T`` only the instructor changes the shared
+demo; students watch it (and, with private sessions, drive their own robots).
+
+Who is the instructor:
+
+- through the HTTP API, a request carrying ``Authorization: Bearer T``; a request that would
+  change the shared session without it gets 401, with a wrong token 403, each with a line
+  saying what to do (``app.web.api.live``);
+- in the browser, the page opened as ``/?token=T``: it frames the 3-D scene with the token in
+  the scene's websocket address (viser's client takes its websocket URL from its ``websocket``
+  query parameter), and the display reads it when the browser connects (:func:`client_token`).
+
+The token is compared in constant time (:func:`hmac.compare_digest`) and never logged: the
+web server's access log is off, and :class:`RedactTokens` blanks ``token=...`` in any record
+of the loggers that could print a URL.
+"""
+
+from __future__ import annotations
+
+import hmac
+import logging
+import re
+from typing import Any
+from urllib.parse import parse_qs, urlsplit
+
+TOKEN_PARAM = "token"
+_TOKEN_IN_TEXT = re.compile(r"(token=)[^&\s\"']+", re.IGNORECASE)
+_BEARER_IN_TEXT = re.compile(r"(bearer\s+)\S+", re.IGNORECASE)
+URL_LOGGERS = (  # a logger's filters see only its own records, not its children's
+    "uvicorn",
+    "uvicorn.access",
+    "uvicorn.error",
+    "websockets",
+    "websockets.server",
+    "viser",
+)
+
+
+class Instructor:
+    """The instructor's token (None: no instructor, everyone may change the shared demo)."""
+
+    def __init__(self, token: str | None):
+        if token is not None and not token.strip():
+            raise ValueError("the instructor token is empty")
+        self._token = token.encode("utf-8") if token is not None else None
+
+    @property
+    def enabled(self) -> bool:
+        return self._token is not None
+
+    def is_token(self, candidate: str | None) -> bool:
+        """True if ``candidate`` is the token (constant time: no timing tells how much of a
+        guess was right)."""
+        if self._token is None or candidate is None:
+            return False
+        return hmac.compare_digest(candidate.encode("utf-8"), self._token)
+
+    def __repr__(self) -> str:  # never the token itself
+        return f"Instructor(enabled={self.enabled})"
+
+
+def client_token(server: Any, client: Any) -> str | None:
+    """The ``token`` query parameter of the websocket a viser client connected with, or None.
+
+    viser keeps the connection's request (the websockets library's ``ServerConnection``) only
+    in a private table, so this reads it defensively: any change there reads as "no token"
+    (the browser is then a student), never as an error."""
+    try:
+        conn = server._websock_server._live_connections[client.client_id]
+        path = conn.request.path
+    except (AttributeError, KeyError, TypeError):
+        return None
+    values = parse_qs(urlsplit(path).query).get(TOKEN_PARAM)
+    return values[0] if values else None
+
+
+def redact(text: str) -> str:
+    """``text`` with any ``token=...`` value and bearer credential blanked."""
+    return _BEARER_IN_TEXT.sub(r"\1***", _TOKEN_IN_TEXT.sub(r"\1***", text))
+
+
+class RedactTokens(logging.Filter):
+    """Blanks tokens in a record's message and arguments (added to :data:`URL_LOGGERS`)."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if isinstance(record.msg, str):
+            record.msg = redact(record.msg)
+        if isinstance(record.args, tuple):
+            record.args = tuple(redact(a) if isinstance(a, str) else a for a in record.args)
+        elif isinstance(record.args, dict):
+            record.args = {
+                k: redact(v) if isinstance(v, str) else v for k, v in record.args.items()
+            }
+        return True
+
+
+def redact_logs() -> RedactTokens:
+    """Install :class:`RedactTokens` on the loggers that could print a URL (idempotent)."""
+    f = RedactTokens()
+    for name in URL_LOGGERS:
+        logger = logging.getLogger(name)
+        if not any(isinstance(x, RedactTokens) for x in logger.filters):
+            logger.addFilter(f)
+    return f
