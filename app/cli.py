@@ -139,10 +139,31 @@ def build_parser() -> argparse.ArgumentParser:
     p = sub.add_parser("analyze", help="the kinematic analysis of eq. (1)-(5)")
     p.add_argument("--json", type=Path, default=None)
 
-    p = sub.add_parser("experiments", help="reproduce the paper's simulation results")
-    p.add_argument("--out", type=Path, required=True)
-    p.add_argument("--quick", action="store_true")
-    p.add_argument("--jobs", type=positive_int, default=None)
+    p = sub.add_parser(
+        "experiments",
+        help="reproduce the paper's simulation results",
+        description="The paper's simulation study on our model: every run on a local process "
+        "pool (or Ray), then results.json, figures/ and report.md in --out.",
+    )
+    p.add_argument("--out", type=Path, required=True, metavar="DIR")
+    p.add_argument("--quick", action="store_true", help="a small smoke set (about 2 min)")
+    p.add_argument(
+        "--jobs",
+        type=positive_int,
+        default=None,
+        metavar="J",
+        help="worker processes (default: the CPU count); with --ray and no address, the "
+        "local Ray instance's CPUs",
+    )
+    p.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="run on Ray: a cluster at ADDRESS, or without one a local Ray instance "
+        "(pip install 'pelvic-walk[cluster]')",
+    )
 
     p = sub.add_parser("sweep", help="a parameter grid over methods (process pool or Ray)")
     add_sweep_arguments(p)
@@ -309,7 +330,7 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main
 
-            return experiments_main(args.out, quick=args.quick, jobs=args.jobs)
+            return experiments_main(args.out, quick=args.quick, jobs=args.jobs, ray=args.ray)
         if args.command == "sweep":
             from app.sweep import sweep_main
 

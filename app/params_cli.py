@@ -62,6 +62,12 @@ def positive_int(text: str) -> int:
     return value
 
 
+def split_list(items: Iterable[str]) -> list[str]:
+    """A list option's items, given with commas or spaces alike: ``--methods fixed mpc``,
+    ``--methods fixed,mpc`` and ``--methods fixed, mpc`` all give ``["fixed", "mpc"]``."""
+    return [part.strip() for item in items for part in item.split(",") if part.strip()]
+
+
 def _meta_of(dotted: str) -> tuple[str, str, dict[str, Any]]:
     group, _, name = dotted.partition(".")
     for g, n, meta in fields():

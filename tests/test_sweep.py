@@ -25,15 +25,19 @@ from app.params_cli import fields
 from app.sim.summary import SUMMARY_KEYS
 from app.sweep import output
 from app.sweep.cli import main
+from app.sweep.engine import InProcess, OneJob, run_tasks
 from app.sweep.grid import grid_from_file, make_grid, parse_sets
 from app.sweep.measure import (
     LIMIT_COLUMNS,
     OUTCOMES,
     LimitSearch,
+    LimitTask,
+    clean,
+    criteria,
     make_tasks,
+    threshold_of,
     walks,
 )
-from app.sweep.run import InProcess, execute
 from controller.params import METHODS
 
 TINY = [
@@ -235,6 +239,55 @@ def test_missing_ray_is_one_line(tmp_path, capsys, monkeypatch):
     assert err.count("\n") == 0 and "pelvic-walk[cluster]" in err
 
 
+def _grid_of(argv: list[str]):
+    from app.sweep.cli import build_parser, grid_from_args
+
+    return grid_from_args(build_parser().parse_args(argv))
+
+
+def test_lists_take_commas_or_spaces_alike():
+    """``--methods fixed mpc`` = ``--methods fixed,mpc``; ``--set X=0.1,0.2`` = ``--set X=0.1
+    0.2``, and one --set may carry several assignments."""
+    from app.params_cli import split_list
+
+    assert split_list(["fixed,mpc"]) == split_list(["fixed", "mpc"]) == ["fixed", "mpc"]
+    assert split_list(["fixed,", "mpc"]) == split_list([" fixed , mpc "]) == ["fixed", "mpc"]
+    base = _grid_of(
+        [
+            "--set",
+            "walk.dsp_ratio=0.1,0.2",
+            "--set",
+            "pelvis.k_pel=0.2,0.3",
+            "--methods",
+            "fixed",
+            "mpc",
+        ]
+    )
+    for argv in (
+        [
+            "--set",
+            "walk.dsp_ratio=0.1",
+            "0.2",
+            "--set",
+            "pelvis.k_pel=0.2,0.3",
+            "--methods",
+            "fixed,mpc",
+        ],
+        [
+            "--set",
+            "walk.dsp_ratio=0.1,",
+            "0.2",
+            "pelvis.k_pel=0.2",
+            "0.3",
+            "--methods",
+            "fixed,",
+            "mpc",
+        ],
+    ):
+        assert _grid_of(argv) == base, argv
+    assert base.methods == ("fixed", "mpc") and len(base.cells()) == 4
+
+
 # -- the limit search -------------------------------------------------------------------------
 def _search(outcome_of_length) -> LimitSearch:
     search = LimitSearch()
@@ -332,6 +385,77 @@ def test_the_limit_search_is_consistent_with_every_run_it_made(table):
         )
 
 
+class _Spec:
+    def __init__(self, x: float):
+        self.step_length = x
+
+
+def _graded_run(spec):
+    """Falls past 0.47 m; lands 1 cm off per 0.2 m of step; kappa(legs) 10 ** (10 x - 0.5)."""
+    x = spec.step_length
+    out = {
+        "success": x <= 0.47 + 1e-9,
+        "landing_error_max": x / 20,
+        "condition_number_legs_max": 10 ** (10 * x - 0.5),
+        "solver_failures": 0,
+        "servo_saturation_substeps": 0,
+        "speed_limited_ticks": 0,
+        "wall_s": 0.1,
+    }
+    return out | {"walks": walks(out), "clean": clean(out)}  # as run_one sets them
+
+
+def test_one_search_brackets_the_clean_limit_at_every_threshold():
+    """A landing error of 1-4 cm and a kappa(legs) bound of 300-3000, from the same runs: each
+    limit is the longest length passing that criterion, found in far fewer runs than one
+    search per threshold."""
+    from app.sweep.grid import Cell
+
+    tests = criteria(landings=(0.01, 0.02, 0.03, 0.04), kappas=(300.0, 1000.0, 3000.0))
+    assert list(tests) == [
+        "walks",
+        "clean",
+        "clean@1cm",
+        "clean@3cm",
+        "clean@4cm",
+        "clean@kappa300",
+        "clean@kappa3000",
+    ]
+    assert threshold_of("clean@3cm") == (0.03, 1000.0) and threshold_of("clean@kappa300") == (
+        0.02,
+        300.0,
+    )
+    search = LimitSearch(names=tuple(tests), first=0.40)
+    task = LimitTask(Cell(0, (), ()), "mpc", search, tests, run=_graded_run)
+    assert run_tasks([task], InProcess()) == task.runs
+    row = task.row()
+    lengths = search.lengths
+    for name, test in tests.items():
+        passing = [x for x in lengths if test(_graded_run(_Spec(x)))]
+        good = [x for x in passing if all(y in passing for y in lengths if y <= x)]
+        assert row[f"{name}_limit"] == (max(good) if good else None), name
+    assert (row["walks_limit"], row["clean_limit"]) == (0.39, 0.34)
+    assert row["clean@1cm_limit"] == 0.19 and row["clean@3cm_limit"] == 0.34
+    assert row["clean@kappa300_limit"] == 0.29 and row["clean@kappa3000_limit"] == 0.39
+    assert search.order[0] == lengths.index(0.40)  # tried first
+    assert task.runs <= 20 and set(task.outcomes) == {lengths[i] for i in search.order}
+
+
+def test_clean_at_other_thresholds():
+    ok = _graded_run(_Spec(0.25))  # lands 1.25 cm off, kappa(legs) 100
+    assert walks(ok) and clean(ok) and not clean(ok, landing=0.01)
+    assert not clean(ok, kappa=50.0) and clean(ok, kappa=1e9)
+    for bad in ("solver_failures", "servo_saturation_substeps", "speed_limited_ticks"):
+        assert not clean({**ok, bad: 1})
+    assert not clean({**ok, "condition_number_legs_max": None})
+
+
+def test_the_engine_runs_one_jobs_in_order_on_any_backend():
+    tasks = [OneJob(pow, 2, k, label=str(k)) for k in range(5)]
+    assert run_tasks(tasks, _Shuffled(3)) == 5
+    assert [t.result for t in tasks] == [1, 2, 4, 8, 16]
+
+
 # -- the driver and the outputs, on a fake run function -------------------------------------
 def _fake_run(spec):
     """Walks up to 0.3 + dsp_ratio + (0.05 for mpc), clean 0.04 m less; deterministic."""
@@ -351,18 +475,21 @@ def _fake_run(spec):
 class _Shuffled(InProcess):
     """Finishes the runs in flight in a random order (as a pool or Ray may)."""
 
-    def __init__(self, fn, seed):
-        super().__init__(fn)
+    slots = 4
+
+    def __init__(self, seed):
+        super().__init__()
         self.rng = random.Random(seed)
 
     def wait_any(self, handles):
         h = self.rng.choice(list(handles))
-        return [(h, self.fn(self._queue.pop(h)))]
+        fn, args = self._queue.pop(h)
+        return [(h, fn(*args))]
 
 
-def _limit_rows(grid, backend):
-    tasks = make_tasks(grid.cells(), grid.methods, grid.measure)
-    n = execute(tasks, backend)
+def _limit_rows(grid, backend, run=_fake_run):
+    tasks = make_tasks(grid.cells(), grid.methods, grid.measure, run=run)
+    n = run_tasks(tasks, backend)
     return output.rows_of(grid, tasks), n
 
 
@@ -371,7 +498,7 @@ def test_a_2d_limit_sweep_table_and_heatmaps(tmp_path):
         parse_sets(["walk.dsp_ratio=0.1,0.2,0.3", "pelvis.k_pel=0.2,0.3", "walk.n_steps=3"]),
         methods=["fixed", "mpc"],
     )
-    rows, n_runs = _limit_rows(grid, InProcess(_fake_run))
+    rows, n_runs = _limit_rows(grid, InProcess())
     assert len(rows) == 3 * 2 * 2
     for row in rows:
         expect = 0.3 + row["walk.dsp_ratio"] + (0.05 if row["method"] == "mpc" else 0)
@@ -382,7 +509,7 @@ def test_a_2d_limit_sweep_table_and_heatmaps(tmp_path):
     assert n_runs == sum(r["runs"] for r in rows)
     # the same table whatever order the runs finish in
     for seed in range(3):
-        assert _limit_rows(grid, _Shuffled(_fake_run, seed))[0] == rows
+        assert _limit_rows(grid, _Shuffled(seed))[0] == rows
 
     columns = output.columns_of(grid, rows)
     assert columns[:4] == ["walk.dsp_ratio", "pelvis.k_pel", "walk.n_steps", "method"]
@@ -400,14 +527,14 @@ def test_a_2d_limit_sweep_table_and_heatmaps(tmp_path):
 
 def test_1d_grids_get_line_plots_and_3d_grids_the_table_only(tmp_path):
     one = make_grid(parse_sets(["walk.dsp_ratio=0.1,0.2"]), methods=["fixed", "mpc"])
-    rows, _ = _limit_rows(one, InProcess(_fake_run))
+    rows, _ = _limit_rows(one, InProcess())
     paths = output.plot_all(one, rows, tmp_path)
     assert sorted(p.name for p in paths) == ["line_clean_limit.png", "line_walks_limit.png"]
     three = make_grid(
         parse_sets(["walk.dsp_ratio=0.1,0.2", "pelvis.k_pel=0.2,0.3", "arms.enabled=true,false"]),
         methods=["mpc"],
     )
-    rows, _ = _limit_rows(three, InProcess(_fake_run))
+    rows, _ = _limit_rows(three, InProcess())
     assert len(rows) == 8
     assert {r["arms.enabled"] for r in rows} == {True, False}
     assert output.plot_all(three, rows, tmp_path / "3d") == []
@@ -432,14 +559,21 @@ def _fake_summary(spec):
         "yaw_momentum_peak": 1.0,
         "energy_two_step_mean": 5.0,
         "condition_number_max": 10 ** (1 + 20 * dsp),
+        "condition_number_legs_max": 10 ** (1 + 25 * dsp),
         "wall_s": 0.25,
     }
 
 
 def test_a_2d_summary_sweep_end_to_end_on_a_fake_run(tmp_path, monkeypatch, capsys):
-    from app.sweep import cli
+    from app.sweep import engine, measure
 
-    monkeypatch.setattr(cli, "make_backend", lambda ray, jobs, n: InProcess(_fake_summary))
+    real = measure.make_tasks
+    monkeypatch.setattr(engine, "make_backend", lambda ray, jobs, n: InProcess())
+    monkeypatch.setattr(
+        measure,
+        "make_tasks",
+        lambda cells, methods, kind: real(cells, methods, kind, _fake_summary),
+    )
     out = tmp_path / "s"
     argv = [
         "--set",
@@ -497,6 +631,7 @@ def test_a_tiny_summary_sweep_writes_the_tidy_table(tiny_local):
     for r in rows:
         assert r["steps_planned"] == 1 and r["runs"] == 1 and r["error"] is None
         assert r["walks"] == walks(r)  # derived the same way from the summary
+        assert r["clean"] == clean(r)  # the thresholds' clean is the summary's at the defaults
         assert r["success"] and r["walks"]  # a 0.2 m step at the default parameters
     header = (tiny_local / output.TABLE_CSV).read_text().splitlines()[0].split(",")
     assert header == list(rows[0])

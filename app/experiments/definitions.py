@@ -1,15 +1,18 @@
 """The study, as data: which runs each section needs.
 
-A run is a :class:`RunSpec`: method, step length, steps, arm swing, seed, and any other
-parameter of ``controller/params.py`` as ``("group.name", value)`` overrides (a parameter sweep
-varies those). Sections ask for runs with the *extracts* they need from each (a summary always;
-``"step"``: one mid-walk step at full rate; ``"walk"``: the walking phase down-sampled;
-``"zmp"``: ZMP and CoM paths with the footholds). The runner merges the requests, so a run
-shared between sections runs once and carries the union of the extracts.
+A run is a :class:`~app.sweep.spec.RunSpec`: method, step length, steps, arm swing, seed, and
+any other parameter of ``controller/params.py`` as ``("group.name", value)`` overrides.
+Sections ask for runs with the *extracts* they need from each (a summary always; ``"step"``:
+one mid-walk step at full rate; ``"walk"``: the walking phase down-sampled; ``"zmp"``: ZMP and
+CoM paths with the footholds). The runner merges the requests, so a run shared between
+sections runs once and carries the union of the extracts.
 
 The sweep of the longest clean step (section 2) is adaptive: a coarse grid first
 (:attr:`Study.sweep_grid`), then :func:`refinement_runs` fills the gap between each method's
-last clean and first failed length at :attr:`Study.sweep_resolution`.
+last clean and first failed length at :attr:`Study.sweep_resolution`. The sensitivity
+section (:class:`Sensitivity`) runs ``app.sweep``'s limit search over a grid of two parameters
+and a few more cells; the robustness section reads Table 1's seeded repeats and adds the
+largest sideways push each method survives (:class:`Pushes`, ``pelvic-walk push-study``).
 
 The paper's numbers are in :mod:`app.experiments.paper`; the lengths the paper's figures and
 Table 1 use come from there.
@@ -17,107 +20,77 @@ Table 1 use come from there.
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
 from app.experiments import paper
-from controller.params import GROUPS, LATERAL_MODES, METHODS, ControllerParams
+from app.sweep.spec import (
+    DISTURBANCE,
+    DISTURBANCE_PERIOD,
+    SEED_PERTURBATION,
+    Override,
+    RunSpec,
+    length,
+)
+from controller.params import LATERAL_MODES, METHODS, ControllerParams
+
+__all__ = [  # the run's own names, for the modules and tests that read them here
+    "DISTURBANCE",
+    "DISTURBANCE_PERIOD",
+    "SEED_PERTURBATION",
+    "RunSpec",
+    "length",
+]
 
 ROTATING = ("redundancy", "mpc")
 EXTRACTS = ("step", "walk", "zmp")
-SEED_PERTURBATION = 0.01  # [rad] std of the seeded initial perturbation of a repeat
-# A seeded repeat is also pushed through the whole run (app.sim.session.RunConfig): a
-# horizontal force on the torso, each axis N(0, DISTURBANCE) [N], renewed every
-# DISTURBANCE_PERIOD [s]. 5 N is 1 % of the robot's weight (~0.1 m/s^2 on the CoM): unmodelled
-# pulls such as a tether or a hand on a safety rope. 10 N made the MPC fall at 0.40 m within 10
-# steps (seed 0); at 5 N both 20-step probes at 0.40 m walked clean. Repeats then differ for
-# the whole run, not only by a start-up transient that dies out.
-DISTURBANCE = 5.0  # [N]
-DISTURBANCE_PERIOD = 0.1  # [s]
-# Parameters a RunSpec sets through its own fields; an override may not set them again.
-_OWN_FIELDS = ("walk.step_length", "walk.n_steps", "arms.enabled")
-
-Override = tuple[str, Any]  # ("group.name", value), e.g. ("pelvis.k_pel", 0.3)
-# One axis of the sensitivity section: a parameter, its values off the default, the methods.
-SensitivityAxis = tuple[str, tuple[Any, ...], tuple[str, ...]]
 LATERAL = "pelvis.lateral_distance"
 _DEFAULT_MODE = ControllerParams().pelvis.lateral_distance
-
-
-def _check_override(name: str, value: Any) -> None:
-    group, _, fname = name.partition(".")
-    if group not in GROUPS:
-        raise ValueError(f"override {name!r}: the group must be one of {', '.join(GROUPS)}")
-    names = {f.name for f in dataclasses.fields(getattr(ControllerParams(), group))}
-    if fname not in names:
-        raise ValueError(f"override {name!r}: {group} has no parameter {fname!r}")
-    if name in _OWN_FIELDS:
-        raise ValueError(f"override {name!r}: set it with the RunSpec's own field")
-    try:
-        hash(value)  # the spec is a dict key
-    except TypeError:
-        raise ValueError(f"override {name!r}: {value!r} is not a single value") from None
+# The authors' public implementation: 0.18 s on both feet at each end of a 1.2 s step, so a
+# share of 0.36 / 1.2 = 0.30 of the step split half before the lift-off and half after the
+# touch-down (walk.dsp_split = both_ends), and half a step width of 0.1278 m. Its 0.06 s rest
+# in the step has no counterpart in our plan.
+AUTHORS = (
+    ("walk.dsp_ratio", 0.30),
+    ("walk.dsp_split", "both_ends"),
+    ("walk.step_width", 0.2556),
+)
 
 
 @dataclass(frozen=True)
-class RunSpec:
-    """One closed-loop run; repeats differ by ``seed`` (when seeded: a 0.01 rad start
-    perturbation and random pushes through the run, :data:`DISTURBANCE`).
+class SensitivityCell:
+    """One cell of the sensitivity section beside the grid: parameters off their defaults."""
 
-    ``overrides`` sets any other parameter of :class:`ControllerParams`, as ``("group.name",
-    value)`` pairs (kept sorted by name, so equal specs compare and hash equal).
-    """
-
-    method: str
-    step_length: float  # [m]
-    n_steps: int
-    arms: bool = True
-    seed: int | None = None
-    overrides: tuple[Override, ...] = ()
-
-    def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise ValueError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
-        for name, value in self.overrides:
-            _check_override(name, value)
-        names = [name for name, _ in self.overrides]
-        if len(set(names)) != len(names):
-            raise ValueError(f"an override is given twice: {names}")
-        object.__setattr__(self, "overrides", tuple(sorted(self.overrides, key=lambda o: o[0])))
-
-    @property
-    def perturbation(self) -> float:
-        return SEED_PERTURBATION if self.seed is not None else 0.0
-
-    @property
-    def disturbance(self) -> float:
-        """[N] std of the seeded pushes (0 without a seed)."""
-        return DISTURBANCE if self.seed is not None else 0.0
-
-    @property
-    def key(self) -> str:
-        """A readable, stable name: ``mpc_L0.300_n10_arms_s-`` (+ ``_pelvis.k_pel=0.3`` ...)."""
-        arms = "arms" if self.arms else "noarms"
-        seed = "-" if self.seed is None else str(self.seed)
-        extra = "".join(f"_{name}={value}" for name, value in self.overrides)
-        return f"{self.method}_L{self.step_length:.3f}_n{self.n_steps}_{arms}_s{seed}{extra}"
-
-    def params(self) -> ControllerParams:
-        """The controller's parameters of this run (defaults, the fields, then the overrides)."""
-        groups: dict[str, dict[str, Any]] = {
-            "walk": {"step_length": self.step_length, "n_steps": self.n_steps},
-            "arms": {"enabled": self.arms},
-        }
-        for name, value in self.overrides:
-            group, _, fname = name.partition(".")
-            groups.setdefault(group, {})[fname] = value
-        return ControllerParams().replace(method=self.method, **groups)
+    name: str  # in words
+    overrides: tuple[Override, ...]
+    methods: tuple[str, ...] = ("fixed", "mpc")
 
 
-def length(x: float) -> float:
-    """Step lengths on a millimetre grid, so equal lengths compare equal."""
-    return round(float(x), 3)
+@dataclass(frozen=True)
+class Sensitivity:
+    """The sensitivity section: the longest step that walks and the longest clean one (at the
+    default thresholds and at each of ``landings`` and ``kappas``) over a grid of two
+    parameters (``rows`` x ``columns``) and the extra ``cells``, for ``methods``."""
+
+    rows: tuple[str, tuple[Any, ...]]  # parameter, values
+    columns: tuple[str, tuple[Any, ...]]
+    cells: tuple[SensitivityCell, ...] = ()
+    methods: tuple[str, ...] = ("fixed", "mpc")
+    steps: int = 6  # steps of each walk of the limit search
+    search: tuple[float, float, float] = (0.20, 0.60, 0.01)  # lo, hi, resolution [m]
+    first: float = 0.40  # [m] tried first: the length the heatmap reads the waist at
+    landings: tuple[float, ...] = (0.01, 0.02, 0.03, 0.04)  # [m] landing-error thresholds
+    kappas: tuple[float, ...] = (300.0, 1000.0, 3000.0)  # kappa(legs) bounds
+
+
+@dataclass(frozen=True)
+class Pushes:
+    """The largest sideways push each method survives (``app.pushes.largest_survived``)."""
+
+    lengths: tuple[float, ...] = (0.20, 0.30, 0.40)  # [m]
+    direction: str = "left"
+    duration: float = 0.1  # [s]
+    resolution: float = 10.0  # [N] of the bisection
 
 
 @dataclass(frozen=True)
@@ -137,11 +110,8 @@ class Study:
     zmp_length: float = paper.ZMP_LENGTH  # Fig. 15
     methods: tuple[str, ...] = field(default=METHODS)
     overrides: tuple[Override, ...] = ()  # applied to every run (a sweep's cell)
-    # the sensitivity section (app.sweep's limit search, one parameter at a time off its
-    # default, plus the baseline); its walks have sensitivity_steps steps
-    sensitivity: tuple[SensitivityAxis, ...] = ()
-    sensitivity_steps: int = 6
-    sensitivity_search: tuple[float, float, float] = (0.10, 0.60, 0.01)  # lo, hi, step [m]
+    sensitivity: Sensitivity | None = None  # section 8 (None: not run)
+    pushes: Pushes | None = None  # the robustness section's push survival (None: not run)
 
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
         """The unseeded run every figure section shares at one (method, length)."""
@@ -164,6 +134,11 @@ class Study:
         return spec == self.figure_run(spec.method, spec.step_length)
 
 
+_LATERAL_CELLS = tuple(
+    SensitivityCell(f"lateral distance: {m}", ((LATERAL, m),), ("mpc",))
+    for m in LATERAL_MODES
+    if m != _DEFAULT_MODE
+)
 FULL = Study(
     name="full",
     n_steps=10,
@@ -173,25 +148,17 @@ FULL = Study(
     energy_lengths=paper.TABLE1_LENGTHS,
     energy_repeats=paper.TABLE1_RUNS,
     energy_steps=paper.TABLE1_STEPS,
-    sensitivity=(
-        ("walk.dsp_ratio", (0.1, 0.35), ("fixed", "mpc")),
-        ("walk.step_time", (0.8, 1.4), ("fixed", "mpc")),
-        ("pelvis.k_pel", (0.15, 0.45), ("mpc",)),  # the fixed pelvis does not read k_pel
-        ("walk.dsp_split", ("both_ends",), ("fixed", "mpc")),
-        (LATERAL, tuple(m for m in LATERAL_MODES if m != _DEFAULT_MODE), ("mpc",)),
+    sensitivity=Sensitivity(
+        rows=("pelvis.k_pel", (0.15, 0.25, 0.35, 0.45)),
+        columns=("walk.dsp_ratio", (0.1, 0.2, 0.3, 0.4)),
+        cells=(
+            SensitivityCell("the authors' DSP and step width", AUTHORS),
+            SensitivityCell("step time 0.8 s", (("walk.step_time", 0.8),)),
+            SensitivityCell("step time 1.4 s", (("walk.step_time", 1.4),)),
+            *_LATERAL_CELLS,
+        ),
     ),
-)
-# The full study made lighter for a shared or slow machine: Table 1 with 3 runs of 6 steps per
-# cell (2 windows each) instead of the paper's 10 x 20, the step-length sweep refined to 0.02 m,
-# and the sensitivity section's limit search over 0.20-0.60 m at 0.02 m with 4-step walks.
-REDUCED = dataclasses.replace(
-    FULL,
-    name="reduced",
-    sweep_resolution=0.02,
-    energy_repeats=3,
-    energy_steps=6,
-    sensitivity_steps=4,
-    sensitivity_search=(0.20, 0.60, 0.02),
+    pushes=Pushes(),
 )
 QUICK = Study(
     name="quick",
@@ -202,12 +169,19 @@ QUICK = Study(
     energy_lengths=(0.15, 0.30, 0.40),
     energy_repeats=2,
     energy_steps=6,
-    sensitivity=(("walk.dsp_split", ("both_ends",), ("mpc",)),),
-    sensitivity_steps=4,
-    sensitivity_search=(0.30, 0.50, 0.05),
+    sensitivity=Sensitivity(
+        rows=("pelvis.k_pel", (0.25, 0.45)),
+        columns=("walk.dsp_ratio", (0.2, 0.3)),
+        cells=(SensitivityCell("the authors' DSP and step width", AUTHORS),),
+        steps=4,
+        search=(0.30, 0.50, 0.05),
+        landings=(0.01, 0.02, 0.03),
+        kappas=(300.0, 1000.0),
+    ),
+    pushes=Pushes(lengths=(0.30,), resolution=50.0),
 )
 
-STUDIES: dict[str, Study] = {"full": FULL, "reduced": REDUCED, "quick": QUICK}
+STUDIES: dict[str, Study] = {"full": FULL, "quick": QUICK}
 Requests = dict[RunSpec, set[str]]
 
 
@@ -267,7 +241,7 @@ def refinement_runs(study: Study, clean_by_method: dict[str, dict[float, bool]])
     """Runs between each method's last clean and first failed coarse length.
 
     The fixed pelvis's refinement lengths are run for every method too: section 6 compares
-    kappa(J) of all methods where the fixed pelvis nears and passes its own limit.
+    kappa of all methods where the fixed pelvis nears and passes its own limit.
     """
     req: Requests = {}
     for m, clean in clean_by_method.items():

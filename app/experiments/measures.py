@@ -4,22 +4,40 @@ Each function takes the :class:`Study` and the :class:`StudyResults` (sections 1
 yet judged) and returns the measured numbers as a dict, or None when the runs the claim needs
 are missing ("not measured"). :data:`app.experiments.claims.CLAIMS` names the function of each
 claim; NaN or None in a number fails any bound on it.
+
+Orderings of energy cells count only when the repeats say the cells differ
+(:func:`app.experiments.energy.order_means`, :func:`~app.experiments.energy.order_stds`);
+otherwise they are ties, in every rule. :func:`at_1ms` gives any energy measure on the 1 ms
+figures instead of the 200 Hz ones.
 """
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from typing import Any, cast
 
-import numpy as np
-
 from app.experiments import paper
 from app.experiments.definitions import ROTATING, Study
-from app.experiments.results import EnergyCell, StudyResults, case_key, length_key
-from app.experiments.sections import significant
+from app.experiments.energy import EnergyCell, EnergySection, order_means, order_stds
+from app.experiments.results import StudyResults
+from app.experiments.runs import case_key, length_key
+from app.experiments.waist import sine_share
+from app.sim.metrics import KAPPA_SINGULAR
 
 Measured = dict[str, Any] | None  # None: the runs a claim needs are missing
+Measure = Callable[[Study, StudyResults], Measured]
 LONG = max(paper.FIGURE_LENGTHS)  # [m] the long step of Fig. 8-9 and 12
+WORDS = {-1: "<", 0: "tie", 1: ">"}
+
+
+def at_1ms(measure: Measure) -> Measure:
+    """``measure`` on the energy from every 1 ms substep instead of the 200 Hz samples."""
+
+    def substep(study: Study, r: StudyResults) -> Measured:
+        return measure(study, dataclasses.replace(r, energy=r.energy.at_substep()))
+
+    return substep
 
 
 def kinematics(study: Study, r: StudyResults) -> Measured:
@@ -70,34 +88,25 @@ def waist_amplitude(study: Study, r: StudyResults) -> Measured:
     )
 
 
-def _toward_share(c: Any) -> float:
-    """The DSP's share of the step's waist range, signed: > 0 toward the coming swing."""
-    turn = 1.0 if c.angle_end_deg >= c.angle_start_deg else -1.0
-    return c.dsp_share_of_range * (1.0 if c.dsp_change_deg * turn > 0 else -1.0)
-
-
-def waist_turns(study: Study, r: StudyResults) -> Measured:
-    """How far each method's waist turns toward the coming swing in the DSP, against a sine
-    over the step (the share a sine moves in the same DSP)."""
-    from app.experiments.sections_more import sine_share
-
+def waist_turns_early(study: Study, r: StudyResults) -> Measured:
+    """When each method's turn toward the coming swing starts (``waist.turn_onset``) and the
+    rate's sign at the lift-off; the DSP share (the size of the early turn) beside it."""
     mpc, red = _waist_pair(r)
     if not (mpc and red):
         return None
     sine = sine_share(mpc.dsp_time / mpc.step_time)
-    m, d = _toward_share(mpc), _toward_share(red)
     return dict(
         length=LONG,
-        sine=100 * sine,
-        mpc_share=100 * m,
-        red_share=100 * d,
-        mpc_ratio=m / sine,
-        red_ratio=d / sine,
-        mpc_minus_red=(m - d) / sine,
-        mpc_dsp=mpc.dsp_change_deg,
-        red_dsp=red.dsp_change_deg,
-        mpc_range=mpc.range_deg,
+        mpc_anticipates=mpc.anticipates,
+        red_anticipates=red.anticipates,
+        mpc_lead=mpc.turn_onset_before_liftoff_s,
+        red_lead=red.turn_onset_before_liftoff_s,
         mpc_rate=mpc.rate_at_liftoff_toward_swing_deg_s,
+        red_rate=red.rate_at_liftoff_toward_swing_deg_s,
+        sine=100 * sine,
+        mpc_share=100 * mpc.dsp_share_toward_swing,
+        red_share=100 * red.dsp_share_toward_swing,
+        mpc_of_sine=mpc.dsp_share_toward_swing / sine if sine else float("nan"),
     )
 
 
@@ -143,115 +152,6 @@ def yaw_redundancy_higher(study: Study, r: StudyResults) -> Measured:
     )
 
 
-def _vs(a: EnergyCell, b: EnergyCell) -> str:
-    """ "a vs b J", with "(n.s.)" when the means differ by less than twice their standard error."""
-    return f"{a.mean:.1f} vs {b.mean:.1f} J" + ("" if significant(a, b) else " (n.s.)")
-
-
-def _wins(wins: int, n: int, details: str) -> dict[str, Any]:
-    return dict(wins=wins, n=n, share=wins / n, details=details)
-
-
-def _mpc_redundancy(
-    r: StudyResults, lengths: list[float]
-) -> list[tuple[float, EnergyCell, EnergyCell]]:
-    pairs = [(x, r.energy.cell("mpc", x), r.energy.cell("redundancy", x)) for x in lengths]
-    return [(x, a, b) for x, a, b in pairs if a and b]
-
-
-def energy_std(study: Study, r: StudyResults) -> Measured:
-    pairs = _mpc_redundancy(r, r.energy.lengths)
-    if not pairs:
-        return None
-    details = ", ".join(f"{x:.2f}: {a.std:.1f} vs {b.std:.1f} J" for x, a, b in pairs)
-    # the cells of EnergySection.cell() have a mean and a std (here and below)
-    wins = sum(cast(float, a.std) < cast(float, b.std) for _, a, b in pairs)
-    return _wins(wins, len(pairs), details)
-
-
-def energy_std_gap(study: Study, r: StudyResults) -> Measured:
-    pairs = _mpc_redundancy(r, r.energy.lengths)
-    gaps = [cast(float, b.std) - cast(float, a.std) for _, a, b in pairs]
-    if len(gaps) < 3:
-        return None
-    rho = float(np.corrcoef(np.argsort(np.argsort(gaps)), np.arange(len(gaps)))[0, 1])
-    details = ", ".join(f"{x:.2f}: {g:+.1f} J" for (x, _, _), g in zip(pairs, gaps, strict=True))
-    return dict(rho=rho, change=gaps[-1] - gaps[0], details=details)
-
-
-def energy_mean_long(study: Study, r: StudyResults) -> Measured:
-    lengths = [x for x in paper.ENERGY_MPC_BELOW_REDUNDANCY if x in r.energy.lengths]
-    pairs = _mpc_redundancy(r, lengths)
-    if not pairs:
-        return None
-    details = ", ".join(f"{x:.2f}: {_vs(a, b)}" for x, a, b in pairs)
-    wins = sum(cast(float, a.mean) < cast(float, b.mean) for _, a, b in pairs)
-    return _wins(wins, len(pairs), details)
-
-
-def energy_vs_fixed(
-    lo: float, hi: float, cheaper: bool
-) -> Callable[[Study, StudyResults], Measured]:
-    """Rotating methods' means against the fixed pelvis's at lengths in (lo, hi]."""
-
-    def measure(study: Study, r: StudyResults) -> Measured:
-        checks = []
-        for x in (x for x in r.energy.lengths if lo + 1e-9 < x <= hi + 1e-9):
-            f = r.energy.cell("fixed", x)
-            for m in ROTATING:
-                c = r.energy.cell(m, x)
-                if f and c:
-                    checks.append((x, m, c, f))
-        if not checks:
-            return None
-        details = "; ".join(f"{x:.2f} {m}: {_vs(c, f)}" for x, m, c, f in checks)
-        return _wins(
-            sum((cast(float, c.mean) < cast(float, f.mean)) == cheaper for _, _, c, f in checks),
-            len(checks),
-            details,
-        )
-
-    return measure
-
-
-def _kappa_ratio_at(r: StudyResults, x: float | None) -> Measured:
-    row = r.kappa.landing_ratio_fixed_over.get(length_key(x), {}) if x is not None else {}
-    if not row.get("mpc"):
-        return None
-    return dict(length=x, ratio=row["mpc"], ratio_redundancy=row.get("redundancy", float("nan")))
-
-
-def own_limit_differs(study: Study, r: StudyResults) -> bool:
-    lc = r.max_step["fixed"].longest_clean
-    return lc is not None and abs(lc - paper.MAX_STEP["fixed"]) > 1e-9
-
-
-def energy_least(study: Study, r: StudyResults) -> Measured:
-    """At each length where at least two methods walked: is the MPC's mean the least?"""
-    wins, n, exceptions, details = 0, 0, [], []
-    for x in r.energy.lengths:
-        cells = {m: c for m in study.methods if (c := r.energy.cell(m, x))}
-        if "mpc" not in cells or len(cells) < 2:
-            continue
-        n += 1
-        least = min(cells, key=lambda m: cast(float, cells[m].mean))
-        if least == "mpc":
-            wins += 1
-        else:
-            exceptions.append(f"{x:.2f}")
-            details.append(f"{x:.2f}: {least} {_vs(cells[least], cells['mpc'])} (MPC)")
-    if not n:
-        return None
-    return dict(
-        wins=wins,
-        n=n,
-        share=wins / n,
-        misses=n - wins,
-        exceptions=", ".join(exceptions) or "none",
-        details="; ".join(details) or "-",
-    )
-
-
 def yaw_similar(study: Study, r: StudyResults) -> Measured:
     """Spread of the methods' peak yaw momentum at the short figure length, arms on and off."""
     x = min(paper.FIGURE_LENGTHS)
@@ -270,9 +170,229 @@ def yaw_similar(study: Study, r: StudyResults) -> Measured:
     return out
 
 
+# -- energy -----------------------------------------------------------------------------------
+def _mean_vs(a: EnergyCell, b: EnergyCell) -> str:
+    """ "a vs b J", with "(n.s.)" when the repeats do not separate the means."""
+    return f"{a.mean:.1f} vs {b.mean:.1f} J" + ("" if order_means(a, b) else " (n.s.)")
+
+
+def _std_vs(a: EnergyCell, b: EnergyCell) -> str:
+    return f"{a.std:.1f} vs {b.std:.1f} J" + ("" if order_stds(a, b) else " (n.s.)")
+
+
+def _orderings(orders: list[int], details: str) -> dict[str, Any]:
+    """Counts of the paper's ordering (-1 in ``orders``), ties and the reverse."""
+    n = len(orders)
+    wins, ties = orders.count(-1), orders.count(0)
+    return dict(wins=wins, ties=ties, losses=n - wins - ties, n=n, share=wins / n, details=details)
+
+
+def _pair_cells(e: EnergySection, a: str, b: str, lengths: list[float]) -> list[tuple]:
+    pairs = [(x, e.cell(a, x), e.cell(b, x)) for x in lengths]
+    return [(x, ca, cb) for x, ca, cb in pairs if ca and cb]
+
+
+def energy_std(study: Study, r: StudyResults) -> Measured:
+    """MPC's std against redundancy's at every length both walked."""
+    pairs = _pair_cells(r.energy, "mpc", "redundancy", r.energy.lengths)
+    if not pairs:
+        return None
+    details = ", ".join(f"{x:.2f}: {_std_vs(a, b)}" for x, a, b in pairs)
+    return _orderings([order_stds(a, b) for _, a, b in pairs], details)
+
+
+def energy_std_gap(study: Study, r: StudyResults) -> Measured:
+    """The std gap (redundancy - MPC) against the length: Spearman's rank correlation and its
+    p-value, and whether the MPC's std is significantly the smaller at the longest length."""
+    from scipy import stats
+
+    pairs = _pair_cells(r.energy, "mpc", "redundancy", r.energy.lengths)
+    if len(pairs) < 3:
+        return None
+    gaps = [cast(float, b.std) - cast(float, a.std) for _, a, b in pairs]
+    res = stats.spearmanr([x for x, _, _ in pairs], gaps)
+    rho, p = float(res.statistic), float(res.pvalue)
+    _, a_last, b_last = pairs[-1]
+    details = ", ".join(f"{x:.2f}: {g:+.1f} J" for (x, _, _), g in zip(pairs, gaps, strict=True))
+    return dict(
+        rho=rho,
+        p=p,
+        grows=bool(rho > 0 and p < 0.05),
+        last_smaller=order_stds(a_last, b_last) == -1,
+        last=pairs[-1][0],
+        details=details,
+    )
+
+
+def mpc_below_redundancy_lengths() -> list[float]:
+    """The lengths of the paper's "the method using redundancy consumed more energy than the
+    method using MPC, except for the case of a 0.3 m step length": Table 1's lengths where
+    both have a value, but the exception."""
+    both = [
+        x for x in paper.TABLE1_LENGTHS if paper.TABLE1["mpc"][x] and paper.TABLE1["redundancy"][x]
+    ]
+    return [x for x in both if x not in paper.table1_lengths_mpc_not_below_redundancy()]
+
+
+def energy_mpc_below_redundancy(study: Study, r: StudyResults) -> Measured:
+    lengths = [x for x in mpc_below_redundancy_lengths() if x in r.energy.lengths]
+    pairs = _pair_cells(r.energy, "mpc", "redundancy", lengths)
+    if not pairs:
+        return None
+    details = ", ".join(f"{x:.2f}: {_mean_vs(a, b)}" for x, a, b in pairs)
+    return _orderings([order_means(a, b) for _, a, b in pairs], details)
+
+
+def energy_vs_fixed(lo: float, hi: float, cheaper: bool) -> Measure:
+    """Rotating methods' means against the fixed pelvis's at lengths in (lo, hi]: the paper's
+    ordering counts where the repeats separate the means."""
+
+    def measure(study: Study, r: StudyResults) -> Measured:
+        checks = []
+        for x in (x for x in r.energy.lengths if lo + 1e-9 < x <= hi + 1e-9):
+            f = r.energy.cell("fixed", x)
+            for m in ROTATING:
+                c = r.energy.cell(m, x)
+                if f and c:
+                    checks.append((x, m, c, f))
+        if not checks:
+            return None
+        details = "; ".join(f"{x:.2f} {m}: {_mean_vs(c, f)}" for x, m, c, f in checks)
+        # -1: the paper's ordering (cheaper: the rotating method below the fixed pelvis)
+        orders = [order_means(c, f) * (1 if cheaper else -1) for _, _, c, f in checks]
+        return _orderings(orders, details)
+
+    return measure
+
+
+def paper_least_misses() -> int:
+    """Table 1's lengths (with at least two methods) where the MPC's mean is not the least."""
+    misses = 0
+    for x in paper.TABLE1_LENGTHS:
+        cells = {m: c for m in paper.TABLE1 if (c := paper.TABLE1[m][x])}
+        if len(cells) >= 2 and min(cells, key=lambda m: cells[m].mean) != "mpc":
+            misses += 1
+    return misses
+
+
+def energy_least(study: Study, r: StudyResults) -> Measured:
+    """At each length where at least two methods walked: the MPC is *least* when its mean is
+    significantly below every other's, *missed* when another's is significantly below it,
+    else tied."""
+    least, misses, n, tied, missed = 0, 0, 0, [], []
+    for x in r.energy.lengths:
+        cells = {m: c for m in study.methods if (c := r.energy.cell(m, x))}
+        if "mpc" not in cells or len(cells) < 2:
+            continue
+        n += 1
+        others = [m for m in cells if m != "mpc"]
+        orders = {m: order_means(cells["mpc"], cells[m]) for m in others}
+        if all(o == -1 for o in orders.values()):
+            least += 1
+        elif any(o == 1 for o in orders.values()):
+            misses += 1
+            below = [m for m, o in orders.items() if o == 1]
+            missed.append(f"{x:.2f} ({', '.join(below)} below)")
+        else:
+            tied.append(f"{x:.2f}")
+    if not n:
+        return None
+    allowed = paper_least_misses()
+    return dict(
+        least=least,
+        misses=misses,
+        ties=n - least - misses,
+        n=n,
+        allowed=allowed,
+        not_least=n - least,
+        missed=", ".join(missed) or "none",
+        tied=", ".join(tied) or "none",
+    )
+
+
+# -- kappa ------------------------------------------------------------------------------------
+def _kappa_ratio_at(r: StudyResults, x: float | None) -> Measured:
+    if x is None:
+        return None
+    row = r.kappa.landing_ratio_fixed_over.get(length_key(x), {})
+    legs = r.kappa.landing_ratio_fixed_over_legs.get(length_key(x), {})
+    if not row.get("mpc"):
+        return None
+    nan = float("nan")
+    return dict(
+        length=x,
+        ratio=row["mpc"],
+        ratio_redundancy=row.get("redundancy", nan),
+        ratio_legs=legs.get("mpc", nan),
+        ratio_legs_redundancy=legs.get("redundancy", nan),
+    )
+
+
+def kappa_ratio_paper_length(study: Study, r: StudyResults) -> Measured:
+    """Fixed / rotating kappa(J_low) at landing at the paper's length."""
+    return _kappa_ratio_at(r, paper.KAPPA_RATIO_LENGTH)
+
+
+def kappa_ratio_own_limit(study: Study, r: StudyResults) -> Measured:
+    """Fixed / rotating kappa(J_low) at landing at our fixed pelvis's longest clean step."""
+    return _kappa_ratio_at(r, r.max_step["fixed"].longest_clean)
+
+
+def own_limit_differs(study: Study, r: StudyResults) -> bool:
+    lc = r.max_step["fixed"].longest_clean
+    return lc is not None and abs(lc - paper.MAX_STEP["fixed"]) > 1e-9
+
+
+def _status(c: Any) -> str:
+    return "clean" if c.clean else "not clean: " + "; ".join(c.reasons)
+
+
+def kappa_diverges(study: Study, r: StudyResults) -> Measured:
+    """kappa(legs) over the run at the paper's length, fixed pelvis against the MPC."""
+    f = r.kappa.cases.get(case_key("fixed", paper.KAPPA_DIVERGES_LENGTH))
+    m = r.kappa.cases.get(case_key("mpc", paper.KAPPA_DIVERGES_LENGTH))
+    if not (f and m and f.kappa_legs_run_max and m.kappa_legs_run_max):
+        return None
+    return dict(
+        fixed_legs=f.kappa_legs_run_max,
+        mpc_legs=m.kappa_legs_run_max,
+        fixed_diverges=f.kappa_legs_run_max >= KAPPA_SINGULAR,
+        mpc_bounded=m.kappa_legs_run_max < KAPPA_SINGULAR,
+        ratio_legs=f.kappa_legs_run_max / m.kappa_legs_run_max,
+        fixed_low=f.kappa_run_max,
+        mpc_low=m.kappa_run_max,
+        status=_status(f),
+    )
+
+
+def kappa_own_limit(study: Study, r: StudyResults) -> Measured:
+    """kappa(legs) of the fixed pelvis at its longest clean and first failed length, and the
+    MPC's at that failed length."""
+    lc, ff = r.max_step["fixed"].longest_clean, r.max_step["fixed"].first_failed
+    if lc is None or ff is None:
+        return None
+    a, b, c = (r.kappa.case(m, x) for m, x in (("fixed", lc), ("fixed", ff), ("mpc", ff)))
+    if not (a and b and c and a.kappa_legs_run_max and b.kappa_legs_run_max):
+        return None
+    if not c.kappa_legs_run_max:
+        return None
+    return dict(
+        lc=lc,
+        ff=ff,
+        fixed_at_limit=a.kappa_legs_run_max,
+        fixed_past=b.kappa_legs_run_max,
+        mpc_past=c.kappa_legs_run_max,
+        fixed_diverges=b.kappa_legs_run_max >= KAPPA_SINGULAR,
+        mpc_bounded=c.kappa_legs_run_max < KAPPA_SINGULAR,
+        mpc_over_fixed=c.kappa_legs_run_max / b.kappa_legs_run_max,
+        fixed_low_past=b.kappa_run_max,
+        mpc_low_past=c.kappa_run_max,
+    )
+
+
 def kappa_events(study: Study, r: StudyResults) -> Measured:
-    """At the long length: MPC's kappa at lift-off above redundancy's, redundancy's at
-    landing above MPC's (median over the steps; J_low and its leg columns)."""
+    """At the long length: MPC's kappa(J_low) at lift-off above redundancy's, redundancy's at
+    landing above MPC's (median over the steps; kappa(legs) beside)."""
     mpc, red = r.kappa.case("mpc", LONG), r.kappa.case("redundancy", LONG)
     if not (mpc and red and mpc.kappa_liftoff_median and red.kappa_liftoff_median):
         return None
@@ -297,63 +417,15 @@ def kappa_events(study: Study, r: StudyResults) -> Measured:
     )
 
 
-def kappa_diverges(study: Study, r: StudyResults) -> Measured:
-    f = r.kappa.cases.get(case_key("fixed", paper.KAPPA_DIVERGES_LENGTH))
-    m = r.kappa.cases.get(case_key("mpc", paper.KAPPA_DIVERGES_LENGTH))
-    if not (f and m):
-        return None
-    return dict(
-        fixed_max=f.kappa_run_max,
-        mpc_max=m.kappa_run_max,
-        fixed_clean=f.clean,
-        ratio=f.kappa_run_max / m.kappa_run_max,
-        status="clean" if f.clean else "not clean: " + "; ".join(f.reasons),
-    )
-
-
-def kappa_own_limit(study: Study, r: StudyResults) -> Measured:
-    lc, ff = r.max_step["fixed"].longest_clean, r.max_step["fixed"].first_failed
-    if lc is None or ff is None:
-        return None
-    near = r.kappa.near_limit_cases
-    a, b = near.get(case_key("fixed", lc)), near.get(case_key("fixed", ff))
-    c = near.get(case_key("mpc", ff))
-    if not (a and b and c):
-        return None
-    return dict(
-        lc=lc,
-        ff=ff,
-        fixed_at_limit=a.kappa_run_max,
-        fixed_past=b.kappa_run_max,
-        mpc_past=c.kappa_run_max,
-        growth=b.kappa_run_max / a.kappa_run_max,
-        mpc_over_fixed=c.kappa_run_max / b.kappa_run_max,
-    )
-
-
+# -- ZMP --------------------------------------------------------------------------------------
 def zmp(study: Study, r: StudyResults) -> Measured:
+    """The LIPM ZMP from the measured CoM in the planned support (the paper's Fig. 15)."""
     z = r.zmp
-    b = r.balance.cases.get(case_key("mpc", study.zmp_length)) if r.balance else None
-    if not z.available or b is None or b.margin_p5_mm is None:
+    if not z.available or z.lipm_in_planned_support_walking is None:
         return None
-    cop, lipm = z.cop_in_measured_support_walking, z.lipm_in_planned_support_walking
-    assert cop is not None and lipm is not None  # set when available
+    out = z.lipm_outside_max_mm
     return dict(
-        cop=cop,
-        lipm=lipm,
-        cop_percent=cop * 100,
-        lipm_percent=lipm * 100,
-        p5=b.margin_p5_mm,
-        min=b.margin_min_mm,
-        tilt=b.tilt_max_deg,
+        lipm=z.lipm_in_planned_support_walking,
+        lipm_percent=100 * z.lipm_in_planned_support_walking,
+        outside="never" if out is None else f"{out:.0f} mm at most",
     )
-
-
-def kappa_ratio_paper_length(study: Study, r: StudyResults) -> Measured:
-    """Fixed / rotating kappa(J) at landing at the paper's length."""
-    return _kappa_ratio_at(r, paper.KAPPA_RATIO_LENGTH)
-
-
-def kappa_ratio_own_limit(study: Study, r: StudyResults) -> Measured:
-    """Fixed / rotating kappa(J) at landing at our fixed pelvis's longest clean step."""
-    return _kappa_ratio_at(r, r.max_step["fixed"].longest_clean)

@@ -60,7 +60,7 @@ WAIST_PEAK_LENGTH = 0.40  # [m]
 # Sec. VI-F, Fig. 16 (experiment): arm swing cuts the yaw angular momentum by up to 60 %.
 ARM_REDUCTION_PERCENT = 60.0
 
-# Sec. VI-E, Fig. 13 (0.30, 0.35, 0.40 m): at 0.30 m kappa(J) of the fixed pelvis at landing is
+# Sec. VI-E, Fig. 13 (0.30, 0.35, 0.40 m): at 0.30 m kappa of the fixed pelvis at landing is
 # about twice the rotating methods'; at 0.35 m it diverges for the fixed pelvis.
 KAPPA_LENGTHS: tuple[float, ...] = (0.30, 0.35, 0.40)
 KAPPA_RATIO = 2.0

@@ -9,45 +9,28 @@ its row.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import jinja2
 import numpy as np
 
 from app.experiments import paper
-from app.experiments.definitions import (
-    DISTURBANCE,
-    DISTURBANCE_PERIOD,
-    ROTATING,
-    SEED_PERTURBATION,
-    Study,
-)
-from app.experiments.results import StudyResults, case_key, length_key
-from app.experiments.sections import SIGNIFICANCE
+from app.experiments.definitions import AUTHORS, ROTATING, Study
+from app.experiments.energy import BOOTSTRAP, SIGNIFICANCE, joint_groups, std_gap_p
+from app.experiments.results import ClaimResult, StudyResults
+from app.experiments.robustness import RobustnessSection
+from app.experiments.runs import case_key, length_key
+from app.experiments.sensitivity import SensitivitySection
+from app.experiments.summary import summary_lines
 from app.experiments.verdicts import FAILS, HOLDS, NOT_MEASURED, PARTLY
+from app.experiments.waist import ANTICIPATION_MIN
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
-from controller.params import METHOD_INFO, ControllerParams
+from app.sweep.measure import threshold_of
+from app.sweep.spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
+from controller.params import LATERAL_MODES, METHOD_INFO, ControllerParams
 
 _P = ControllerParams()
-# joints grouped for the energy breakdown: group -> name fragments of models.dyros_jet.JOINTS
-JOINT_GROUPS = {
-    "hip yaw": ("hip_yaw",),
-    "hip roll": ("hip_roll",),
-    "hip pitch": ("hip_pitch",),
-    "knee": ("knee",),
-    "ankle pitch": ("ankle_pitch",),
-    "ankle roll": ("ankle_roll",),
-    "waist": ("waist",),
-    "arms": ("shoulder", "elbow"),
-}
-
-
-def joint_groups(per_joint: list[float], joints: list[str]) -> dict[str, float]:
-    """Per-joint figures summed into :data:`JOINT_GROUPS` (both legs together)."""
-    return {
-        g: sum(v for v, j in zip(per_joint, joints, strict=True) if any(f in j for f in frags))
-        for g, frags in JOINT_GROUPS.items()
-    }
 
 
 VERDICT_MARK = {
@@ -85,7 +68,7 @@ def percent(v: float | None, spec: str = ".1f") -> str:
 
 
 def kappa(v: float | None) -> str:
-    """kappa(J) for a table: singular values (>= 1e6) in words, large ones in powers of ten."""
+    """A condition number for a table: singular (>= 1e6) in words, large in powers of ten."""
     if v is None:
         return DASH
     if v >= 1e6:
@@ -129,6 +112,66 @@ def energy_note(r: StudyResults) -> str:
     )
 
 
+def lateral_words() -> dict[str, str]:
+    """Each reading of the lateral distance in words, from its parameter's help text
+    (``controller/params.py``: "mode: words; mode: words")."""
+    from controller.params import PelvisMpcParams, spec
+
+    text = spec(PelvisMpcParams())["lateral_distance"].get("help", "")
+    out = {}
+    for part in text.split("; "):
+        mode, sep, words = part.partition(": ")
+        if sep and mode.strip() in LATERAL_MODES:
+            out[mode.strip()] = words.strip()
+    return out
+
+
+def verdict_cell(c: ClaimResult) -> str:
+    """A claim's verdict, with another reading's where it differs (e.g. energy at 1 ms)."""
+    out = VERDICT_MARK.get(c.verdict, c.verdict)
+    other = [f"at {k}: {v}" for k, v in c.variants.items() if v != c.verdict]
+    return out + (f" ({'; '.join(other)})" if other else "")
+
+
+def robustness_totals(rob: RobustnessSection, methods: Sequence[str]) -> dict[str, dict]:
+    """Per method, the repeats' counts summed over the lengths."""
+    out = {}
+    for m in methods:
+        cells = [c for c in (rob.cells.get(case_key(m, x)) for x in rob.lengths) if c]
+        out[m] = {
+            "runs": sum(c.runs for c in cells),
+            "fell": sum(c.fell for c in cells),
+            "off": sum(c.off_foothold for c in cells),
+            "landings": sum(c.landings for c in cells),
+            "landings_off": sum(c.landings_off for c in cells),
+        }
+    return out
+
+
+def criterion_words(name: str) -> str:
+    """A clean criterion of the sensitivity section in words."""
+    landing, bound = threshold_of(name)
+    return f"landing < {landing * 100:g} cm, kappa(legs) < {bound:g}"
+
+
+def threshold_words(s: SensitivitySection) -> str:
+    """The thresholds the sensitivity section varies, in words."""
+    landings = sorted({threshold_of(c)[0] for c in s.criteria if c != "walks"})
+    bounds = sorted({threshold_of(c)[1] for c in s.criteria if c != "walks"})
+    return (
+        ", ".join(f"{x * 100:g}" for x in landings)
+        + " cm and a kappa(legs) bound of "
+        + ", ".join(f"{x:g}" for x in bounds)
+    )
+
+
+AUTHORS_WORDS = (
+    "0.18 s on both feet at each end of a 1.2 s step, i.e. `walk.dsp_ratio` = 0.30 with "
+    "`walk.dsp_split` = both_ends, and half a step width of 0.1278 m (`walk.step_width` = "
+    "0.2556); their 0.06 s rest within the step has no counterpart in our plan"
+)
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("app.experiments", "templates"),
@@ -160,6 +203,21 @@ def _environment() -> jinja2.Environment:
         lateral_floor=_P.pelvis.lateral_floor,
         step_width=_P.walk.step_width,
         joint_groups=joint_groups,
+        verdict_cell=verdict_cell,
+        robustness_totals=robustness_totals,
+        criterion_words=criterion_words,
+        threshold_words=threshold_words,
+        std_p=std_gap_p,
+        BOOTSTRAP=BOOTSTRAP,
+        authors=[list(a) for a in AUTHORS],
+        authors_words=AUTHORS_WORDS,
+        anticipation_min=ANTICIPATION_MIN,
+        lateral_modes=LATERAL_MODES,
+        lateral_words=lateral_words(),
+        horizon=_P.com.horizon,
+        step_time=_P.walk.step_time,
+        dsp_ratio=_P.walk.dsp_ratio,
+        k_pel=_P.pelvis.k_pel,
     )
     return env
 
@@ -169,5 +227,10 @@ def render(study: Study, results: StudyResults) -> str:
     return (
         _environment()
         .get_template("report.md.j2")
-        .render(study=study, r=results, energy_note=energy_note(results))
+        .render(
+            study=study,
+            r=results,
+            energy_note=energy_note(results),
+            summary=summary_lines(study, results),
+        )
     )

@@ -12,11 +12,13 @@ from __future__ import annotations
 import math
 import operator
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from app.experiments.definitions import Study
 from app.experiments.results import ClaimResult, StudyResults
+
+Measure = Callable[[Study, StudyResults], dict[str, Any] | None]
 
 HOLDS, PARTLY, FAILS, NOT_MEASURED = "holds", "partly", "does not hold", "not measured"
 VERDICTS = (HOLDS, PARTLY, FAILS, NOT_MEASURED)
@@ -121,18 +123,22 @@ class Claim:
     section: str  # of the report
     claim: str  # in words
     paper: str  # the paper's value
-    measure: Callable[[Study, StudyResults], dict[str, Any] | None]
+    measure: Measure
     ours: str  # our value: a ``str.format`` template over the measured numbers
     rule: Rule
     names: Mapping[str, str]  # measured number -> words, for the rule's text
     note: str = ""  # why the rule is what it is
     applies: Callable[[Study, StudyResults], bool] = _always
+    # other readings of the same numbers, judged by the same rule (e.g. "1 ms": the energy
+    # from every 1 ms substep instead of 200 Hz samples)
+    variants: Mapping[str, Measure] = field(default_factory=dict)
 
     def judge(self, study: Study, r: StudyResults) -> ClaimResult:
         measured = self.measure(study, r)
         rule = self.rule.words(self.names) + (f" ({self.note})" if self.note else "")
         ours = self.ours.format(**measured) if measured is not None else "-"
         v = verdict(measured, self.rule)
+        variants = {name: verdict(m(study, r), self.rule) for name, m in self.variants.items()}
         return ClaimResult(
-            self.id, self.section, self.claim, self.paper, ours, v, rule, measured or {}
+            self.id, self.section, self.claim, self.paper, ours, v, rule, measured or {}, variants
         )

@@ -5,7 +5,8 @@ extracts its sections asked for (one mid-walk step at 200 Hz, the walking phase 
 the full ring buffer never crosses a process boundary.
 
 The footstep plan is read through its tables (step timing) and, for the feet the plan has on
-the ground, through :func:`_planned_feet` alone.
+the ground, through :func:`_planned_feet` alone. While the run goes, :class:`EdgeCounter`
+notes where the centre of pressure sits when it is on a sole's edge (section 7).
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from app.experiments.definitions import DISTURBANCE_PERIOD, RunSpec
-from app.experiments.results import (
+from app.experiments.balance import EDGES
+from app.experiments.runs import (
     Extracts,
     RunResult,
     RunSummary,
@@ -26,6 +27,7 @@ from app.experiments.results import (
     ZmpExtract,
     samples,
 )
+from app.sweep.spec import RunSpec
 from controller.kinematics import KAPPA_CAP
 from models.dyros_jet import FOOT_SIZE
 
@@ -46,6 +48,7 @@ ZMP_COLUMNS = (
 )
 DOWNSAMPLE = 2  # walking-phase extracts at 100 Hz
 LANDING_WINDOW = 0.05  # [s] kappa "at landing / lift-off" = max within +/- this of the event
+EDGE_MARGIN = 5e-4  # [m] a CoP closer than this to the support polygon's edge is on the edge
 
 
 def _event_peaks(t: np.ndarray, kappa: np.ndarray, events: np.ndarray) -> list[float | None]:
@@ -67,22 +70,63 @@ def _planned_feet(plan: Any, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return sample.on_ground, np.stack([sample.p_left, sample.p_right], axis=1)
 
 
-def _planned_support_ratio(plan: Any, t: np.ndarray, x: np.ndarray, y: np.ndarray) -> float:
-    """Share of samples whose (x, y) lies in the convex hull of the feet the plan has down."""
-    from app.sim.world import convex_hull, point_in_polygon
+def _planned_support(
+    plan: Any, t: np.ndarray, x: np.ndarray, y: np.ndarray
+) -> tuple[float, float | None]:
+    """(share of samples whose (x, y) lies in the convex hull of the feet the plan has down,
+    the farthest a sample lay outside it [mm] (None: none outside))."""
+    from app.sim.world import convex_hull, point_in_polygon, polygon_margin
 
     hx, hy = FOOT_SIZE[0] / 2, FOOT_SIZE[1] / 2
     corners = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
     on_ground, feet = _planned_feet(plan, t)
     inside = n = 0
+    outside = 0.0
     for i in range(len(t)):
         if not (math.isfinite(x[i]) and math.isfinite(y[i])):
             continue
         pts = [corners + feet[i, s, :2] for s in range(2) if on_ground[i, s]]
         hull = convex_hull(np.vstack(pts))
+        p = np.array([x[i], y[i]])
         n += 1
-        inside += int(point_in_polygon(np.array([x[i], y[i]]), hull))
-    return inside / n if n else float("nan")
+        if point_in_polygon(p, hull):
+            inside += 1
+        else:
+            outside = max(outside, -polygon_margin(p, hull))
+    share = inside / n if n else float("nan")
+    return share, (1000.0 * outside if outside > 0 else None)
+
+
+class EdgeCounter:
+    """Counts the walking ticks, and those with the CoP on the support polygon's edge by edge
+    (:data:`~app.experiments.balance.EDGES`): a run's ``on_tick`` hook."""
+
+    def __init__(self) -> None:
+        self.counts = dict.fromkeys(("walking", *EDGES), 0)
+        hx, hy = FOOT_SIZE[0] / 2, FOOT_SIZE[1] / 2
+        self.half = (hx, hy)
+
+    def __call__(self, session: Any) -> None:
+        plan, m = session.plan, session.measured
+        if m is None or not plan.t_start <= m.t <= plan.walk_end or session.fell:
+            return
+        self.counts["walking"] += 1
+        if m.contacts.cop is None or not abs(m.balance_margin) < EDGE_MARGIN:
+            return
+        feet = np.flatnonzero(m.contacts.in_contact)
+        if len(feet) != 1:
+            self.counts["two feet"] += 1
+            return
+        side = int(feet[0])  # 0 left, 1 right (app.sim.world's order)
+        d, site = session.world.data, int(session.world.sole_site_ids[side])
+        mat = d.site_xmat[site].reshape(3, 3)
+        u, v = mat[:2, :2].T @ (m.contacts.cop - d.site_xpos[site, :2])  # sole frame
+        hx, hy = self.half
+        gaps = {"toe": hx - u, "heel": u + hx, "left": hy - v, "right": v + hy}
+        edge = min(gaps, key=lambda k: gaps[k])
+        if edge in ("left", "right"):  # the outer edge is away from the other foot
+            edge = "outer" if (edge == "left") == (side == 0) else "inner"
+        self.counts[edge] += 1
 
 
 def _step_extract(
@@ -90,6 +134,7 @@ def _step_extract(
     plan: Any,
     t: np.ndarray,
     kappa: np.ndarray,
+    kappa_legs: np.ndarray,
     mid_step: int,
     summary: dict,
     lead: float,
@@ -101,6 +146,7 @@ def _step_extract(
         t=samples(t[sel] - t0),
         **{c: samples(series.column(c)[sel]) for c in STEP_COLUMNS},
         kappa=samples(kappa[sel]),
+        kappa_legs=samples(kappa_legs[sel]),
         step_index=k,
         step_start=t0,
         duration=dur,
@@ -120,31 +166,28 @@ def _zmp_extract(
 ) -> ZmpExtract:
     lx, ly = series.column("lipm_zmp_x"), series.column("lipm_zmp_y")
     cx, cy = series.column("cop_x"), series.column("cop_y")
+    lipm, lipm_out = _planned_support(plan, t[walking], lx[walking], ly[walking])
+    cop, _ = _planned_support(plan, t[walking], cx[walking], cy[walking])
     return ZmpExtract(
         t=samples(t[sub]),
         **{c: samples(series.column(c)[sub]) for c in ZMP_COLUMNS},
         footholds=plan.footholds()[:, :2].tolist(),
-        lipm_in_planned_support=_planned_support_ratio(plan, t[walking], lx[walking], ly[walking]),
-        cop_in_planned_support=_planned_support_ratio(plan, t[walking], cx[walking], cy[walking]),
+        lipm_in_planned_support=lipm,
+        cop_in_planned_support=cop,
         cop_in_measured_support=float(np.nanmean(series.column("zmp_in_support")[walking])),
+        lipm_outside_max_mm=lipm_out,
     )
 
 
 def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResult:
     """Run one spec headless; return its summary and the requested extracts (small)."""
-    from app.runs import RunConfig, run
+    from app.runs import run
 
     start = time.perf_counter()
     params = spec.params()
+    edges = EdgeCounter()
     try:
-        cfg = RunConfig(
-            params=params,
-            seed=spec.seed,
-            perturbation=spec.perturbation,
-            disturbance=spec.disturbance,
-            disturbance_period=DISTURBANCE_PERIOD,
-        )
-        session = run(cfg)
+        session = run(spec.config(), on_tick=edges)
     except Exception as exc:  # a crashed run is reported, never hides the others
         return RunResult(
             spec, None, error=f"{type(exc).__name__}: {exc}", wall_s=time.perf_counter() - start
@@ -167,7 +210,7 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
     lead = params.com.sample_time - params.control_dt
     out = Extracts(
         step=(
-            _step_extract(series, plan, t, kappa, mid_step, summary, lead)
+            _step_extract(series, plan, t, kappa, kappa_legs, mid_step, summary, lead)
             if "step" in extracts
             else None
         ),
@@ -190,6 +233,7 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
             kappa_landing=_event_peaks(t, kappa, land),
             kappa_legs_liftoff=_event_peaks(t, kappa_legs, lift),
             kappa_legs_landing=_event_peaks(t, kappa_legs, land),
+            cop_edge_ticks=edges.counts,
         ),
         out,
         wall_s=time.perf_counter() - start,

@@ -2,13 +2,15 @@
 
 Where each thing is:
 
+- ``spec``: one run as plain data (:class:`~app.sweep.spec.RunSpec`), what the sweep and the
+  study (``app.experiments``) run.
+- ``engine``: the run engine both use: jobs of plain data on a backend (local ``spawn``
+  process pool, Ray, in-process), one job in flight per task, with a progress bar.
 - ``grid``: the grid from ``--set GROUP.NAME=V1,V2,...`` options or a YAML / JSON file, any
   field of ``controller/params.py``, checked by ``app.params_cli``; cells = cartesian product.
 - ``measure``: what one (cell, method) computes: ``summary`` (one walk, its summary keys) or
-  ``limit`` (the longest step that walks and the longest that is clean, by bisection); and
-  :func:`~app.sweep.measure.run_one`, one headless run of a ``RunSpec``.
-- ``run``: the backends (local ``spawn`` process pool, Ray, in-process) and the loop that keeps
-  one run in flight per task, with a progress bar on stderr.
+  ``limit`` (the longest step that walks and the longest that is clean, by bisection, at one or
+  several clean thresholds); and :func:`~app.sweep.measure.run_one`, one headless run.
 - ``output``: the tidy table (``sweep.csv``, ``sweep.jsonl``), heatmaps / line plots,
   ``grid.json`` and ``README.md`` in ``--out``.
 - ``cli``: :func:`add_sweep_arguments` and :func:`sweep_main` for ``app.cli``, and

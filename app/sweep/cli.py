@@ -17,15 +17,23 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, NoReturn
 
-from app.params_cli import positive_int
-from app.sweep.grid import MEASURES, Grid, GridError, grid_from_file, make_grid, parse_sets
+from app.params_cli import positive_int, split_list
+from app.sweep.grid import (
+    MEASURES,
+    Grid,
+    GridError,
+    assignments,
+    grid_from_file,
+    make_grid,
+    parse_sets,
+)
 
 PROG = "pelvic-walk sweep"
 DEFAULT_OUT = Path("sweep")
 
 
 def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
-    """The ``sweep`` options (INTERFACES.md) on ``parser``; :func:`sweep_main` reads them."""
+    """The ``sweep`` options (docs/INTERFACES.md) on ``parser``; :func:`sweep_main` reads them."""
     parser.add_argument(
         "--grid",
         type=Path,
@@ -37,18 +45,20 @@ def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--set",
         dest="grid_set",
-        action="append",
+        action="extend",
+        nargs="+",
         default=[],
         metavar="GROUP.NAME=V1,V2,...",
-        help="an axis of the grid: any parameter of controller/params.py and its values "
-        "(repeatable; one value = fixed)",
+        help="an axis of the grid: any parameter of controller/params.py and its values, "
+        "separated by commas or spaces (repeatable; one value = fixed)",
     )
     parser.add_argument(
         "--methods",
         nargs="+",
         default=None,
         metavar="METHOD",
-        help="walking methods (default: the grid file's, else fixed redundancy mpc)",
+        help="walking methods, separated by commas or spaces (default: the grid file's, else "
+        "fixed redundancy mpc)",
     )
     parser.add_argument(
         "--measure",
@@ -86,14 +96,15 @@ def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
 
 def grid_from_args(args: argparse.Namespace) -> Grid:
     """The grid the options ask for (GridError, one line, otherwise)."""
-    sets = list(getattr(args, "grid_set", None) or [])
+    sets = assignments(getattr(args, "grid_set", None) or [])
+    methods = split_list(args.methods) if args.methods is not None else None
     if args.grid is not None and sets:
         raise GridError("give either --grid FILE or --set GROUP.NAME=V1,V2,..., not both")
     if args.grid is None and not sets:
         raise GridError("give the grid: --grid FILE or --set GROUP.NAME=V1,V2,...")
     if args.grid is not None:
-        return grid_from_file(args.grid, methods=args.methods, measure=args.measure)
-    return make_grid(parse_sets(sets), methods=args.methods, measure=args.measure)
+        return grid_from_file(args.grid, methods=methods, measure=args.measure)
+    return make_grid(parse_sets(sets), methods=methods, measure=args.measure)
 
 
 def check_runs(grid: Grid) -> None:
@@ -131,10 +142,10 @@ def command_of(args: argparse.Namespace) -> str:
     parts = ["pelvic-walk", "sweep"]
     if args.grid is not None:
         parts += ["--grid", str(args.grid)]
-    for text in getattr(args, "grid_set", None) or []:
+    for text in assignments(getattr(args, "grid_set", None) or []):
         parts += ["--set", text]
     if args.methods:
-        parts += ["--methods", *args.methods]
+        parts += ["--methods", ",".join(split_list(args.methods))]
     if args.measure:
         parts += ["--measure", args.measure]
     parts += ["--out", str(args.out)]
@@ -143,17 +154,6 @@ def command_of(args: argparse.Namespace) -> str:
     if args.ray is not None:
         parts += ["--ray", *([args.ray] if args.ray else [])]
     return shlex.join(parts)
-
-
-def make_backend(ray: str | None, jobs: int, n_tasks: int) -> Any:
-    """Ray (``ray`` not None; ImportError / ConnectionError with one line), else a process
-    pool of ``jobs`` workers (at most one per task), else in-process for one job."""
-    from app.sweep.run import InProcess, LocalPool, RayCluster
-
-    if ray is not None:
-        return RayCluster(ray or None, jobs)
-    workers = max(1, min(jobs, n_tasks))
-    return InProcess() if workers == 1 else LocalPool(workers)
 
 
 def _describe(grid: Grid, row: dict[str, Any]) -> str:
@@ -197,8 +197,8 @@ def sweep_main(args: argparse.Namespace) -> int:
         return fail(problem)
 
     from app.sweep import output
+    from app.sweep.engine import make_backend, run_tasks
     from app.sweep.measure import make_tasks
-    from app.sweep.run import execute
 
     jobs = args.jobs or os.cpu_count() or 1
     tasks = make_tasks(grid.cells(), grid.methods, grid.measure)
@@ -211,7 +211,7 @@ def sweep_main(args: argparse.Namespace) -> int:
     try:
         n_cells, n_methods = len(grid.cells()), len(grid.methods)
         desc = f"sweep {grid.measure} ({n_cells} cells x {n_methods} methods: {backend.name})"
-        n_runs = execute(tasks, backend, desc=desc)
+        n_runs = run_tasks(tasks, backend, desc=desc)
     except KeyboardInterrupt:
         return 130
     finally:

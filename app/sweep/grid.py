@@ -25,8 +25,8 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from app.experiments.definitions import RunSpec
-from app.params_cli import parse_assignment
+from app.params_cli import parse_assignment, split_list
+from app.sweep.spec import RunSpec
 from controller.params import METHODS, ControllerParams
 
 MEASURES = ("limit", "summary")
@@ -194,6 +194,23 @@ def make_grid(
         measure=measure,
     )
     return grid
+
+
+def assignments(tokens: Sequence[str]) -> list[str]:
+    """``--set`` tokens as ``GROUP.NAME=V1,V2,...`` texts, values given with commas or spaces
+    alike: ``["walk.dsp_ratio=0.1", "0.2", "pelvis.k_pel=0.2,0.3"]`` ->
+    ``["walk.dsp_ratio=0.1,0.2", "pelvis.k_pel=0.2,0.3"]`` (a token with ``=`` starts an
+    assignment, one without continues the previous one's values)."""
+    out: list[list[str]] = []
+    for token in tokens:
+        name, sep, rhs = token.partition("=")
+        if sep:
+            out.append([name.strip(), *split_list([rhs])])
+        elif out:
+            out[-1] += split_list([token])
+        else:
+            raise GridError(f"--set {token}: expected GROUP.NAME=V1,V2,...")
+    return [f"{name}={','.join(values)}" for name, *values in out]
 
 
 def parse_sets(texts: Sequence[str]) -> list[tuple[str, list[Value]]]:

@@ -58,7 +58,8 @@ QUANTITIES: dict[str, dict[str, tuple[str, str, bool]]] = {
         "waist_yaw_max_deg": ("waist yaw max", "deg", False),
         "yaw_momentum_peak": ("peak yaw momentum", "kg m^2/s", False),
         "energy_two_step_mean": ("energy per two steps (eq. 44)", "J", False),
-        "condition_number_max": ("kappa(J) max", "", True),
+        "condition_number_max": ("kappa(J_low) max", "", True),
+        "condition_number_legs_max": ("kappa(legs) max", "", True),
     },
 }
 
@@ -347,7 +348,7 @@ def write_readme(
         lines += [
             "For each cell and method: the longest step length that *walks* (no fall, the plan "
             "completed, every landing within 2 cm) and the longest that is *clean* (also no QP "
-            "failure, no servo saturation, no IK tick at the joint-speed limit, kappa(J) below "
+            "failure, no servo saturation, no IK tick at the joint-speed limit, kappa(legs) below "
             f"the singular bound), searched from {SEARCH_MIN:.2f} to {SEARCH_MAX:.2f} m at "
             f"{RESOLUTION:.2f} m by bisection (walks first, then clean inside the bracket left). "
             "A limit is the longest length below the shortest failed one found; `*_first_fail` "

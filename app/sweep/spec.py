@@ -1,0 +1,134 @@
+"""One closed-loop run as plain data: :class:`RunSpec` (what the study and a sweep run).
+
+A spec is method, step length, steps, arm swing, seed, and any other parameter of
+``controller/params.py`` as ``("group.name", value)`` overrides. It crosses process and Ray
+boundaries as it is (no MuJoCo or Pinocchio object): a worker builds its own run from
+:meth:`RunSpec.config`.
+
+A *seeded* spec is one of the study's repeats: a 0.01 rad perturbation of the initial state and
+a horizontal force on the torso through the whole run, each axis N(0, :data:`DISTURBANCE`)
+renewed every :data:`DISTURBANCE_PERIOD` (``app.sim.session.RunConfig``). 5 N is 1 % of the
+robot's weight (~0.1 m/s^2 on the CoM): unmodelled pulls such as a tether or a hand on a safety
+rope. Repeats then differ for the whole run, not only by a start-up transient that dies out.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from controller.params import GROUPS, METHODS, ControllerParams
+
+if TYPE_CHECKING:
+    from app.sim.session import RunConfig
+
+SEED_PERTURBATION = 0.01  # [rad] std of the seeded initial perturbation of a repeat
+DISTURBANCE = 5.0  # [N] std of each axis of the seeded pushes
+DISTURBANCE_PERIOD = 0.1  # [s] a push is held this long, then drawn again
+# Parameters a RunSpec sets through its own fields; an override may not set them again.
+OWN_FIELDS = ("walk.step_length", "walk.n_steps", "arms.enabled")
+
+Override = tuple[str, Any]  # ("group.name", value), e.g. ("pelvis.k_pel", 0.3)
+
+
+def length(x: float) -> float:
+    """Step lengths on a millimetre grid, so equal lengths compare equal."""
+    return round(float(x), 3)
+
+
+def _check_override(name: str, value: Any) -> None:
+    group, _, fname = name.partition(".")
+    if group not in GROUPS:
+        raise ValueError(f"override {name!r}: the group must be one of {', '.join(GROUPS)}")
+    names = {f.name for f in dataclasses.fields(getattr(ControllerParams(), group))}
+    if fname not in names:
+        raise ValueError(f"override {name!r}: {group} has no parameter {fname!r}")
+    if name in OWN_FIELDS:
+        raise ValueError(f"override {name!r}: set it with the RunSpec's own field")
+    try:
+        hash(value)  # the spec is a dict key
+    except TypeError:
+        raise ValueError(f"override {name!r}: {value!r} is not a single value") from None
+
+
+@dataclass(frozen=True)
+class RunSpec:
+    """One closed-loop run; repeats differ by ``seed`` (see the module docstring).
+
+    ``overrides`` sets any other parameter of :class:`ControllerParams`, as ``("group.name",
+    value)`` pairs (kept sorted by name, so equal specs compare and hash equal).
+    """
+
+    method: str
+    step_length: float  # [m]
+    n_steps: int
+    arms: bool = True
+    seed: int | None = None
+    overrides: tuple[Override, ...] = ()
+
+    def __post_init__(self) -> None:
+        if self.method not in METHODS:
+            raise ValueError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        for name, value in self.overrides:
+            _check_override(name, value)
+        names = [name for name, _ in self.overrides]
+        if len(set(names)) != len(names):
+            raise ValueError(f"an override is given twice: {names}")
+        object.__setattr__(self, "overrides", tuple(sorted(self.overrides, key=lambda o: o[0])))
+
+    @property
+    def perturbation(self) -> float:
+        """[rad] std of the seeded initial perturbation (0 without a seed)."""
+        return SEED_PERTURBATION if self.seed is not None else 0.0
+
+    @property
+    def disturbance(self) -> float:
+        """[N] std of the seeded pushes (0 without a seed)."""
+        return DISTURBANCE if self.seed is not None else 0.0
+
+    @property
+    def key(self) -> str:
+        """A readable, stable name: ``mpc_L0.300_n10_arms_s-`` (+ ``_pelvis.k_pel=0.3`` ...)."""
+        arms = "arms" if self.arms else "noarms"
+        seed = "-" if self.seed is None else str(self.seed)
+        extra = "".join(f"_{name}={value}" for name, value in self.overrides)
+        return f"{self.method}_L{self.step_length:.3f}_n{self.n_steps}_{arms}_s{seed}{extra}"
+
+    def params(self) -> ControllerParams:
+        """The controller's parameters of this run (defaults, the fields, then the overrides)."""
+        groups: dict[str, dict[str, Any]] = {
+            "walk": {"step_length": self.step_length, "n_steps": self.n_steps},
+            "arms": {"enabled": self.arms},
+        }
+        for name, value in self.overrides:
+            group, _, fname = name.partition(".")
+            groups.setdefault(group, {})[fname] = value
+        return ControllerParams().replace(method=self.method, **groups)
+
+    def config(self) -> RunConfig:
+        """The headless run of this spec (``app.runs.run`` takes it)."""
+        from app.sim.session import RunConfig
+
+        return RunConfig(
+            params=self.params(),
+            seed=self.seed,
+            perturbation=self.perturbation,
+            disturbance=self.disturbance,
+            disturbance_period=DISTURBANCE_PERIOD,
+        )
+
+    def command(self) -> str:
+        """The ``pelvic-walk simulate`` command line that reruns this spec."""
+        parts = [
+            "pelvic-walk simulate",
+            f"--method {self.method}",
+            f"--step-length {self.step_length:g}",
+            f"--steps {self.n_steps}",
+        ]
+        if not self.arms:
+            parts.append("--no-arms")
+        if self.seed is not None:
+            parts.append(f"--seed {self.seed}")
+        parts += [f"--set {name}={value}" for name, value in self.overrides]
+        return " ".join(parts)
