@@ -11,7 +11,7 @@ from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, zmp_of
-from controller.params import method_hex
+from app.methods import method_hex
 from models.dyros_jet import FOOT_SIZE
 
 

@@ -12,8 +12,8 @@ from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, label, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, case_key
+from app.methods import method_hex
 from app.sim.metrics import LANDING_ERROR_CLEAN
-from controller.params import method_hex
 
 
 def fig_robustness(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:

@@ -9,7 +9,7 @@ from app.experiments.definitions import ROTATING, Study
 from app.experiments.fig_style import DEG, finish, label, plt, shade_dsp
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, step_of
-from controller.params import method_hex
+from app.methods import method_hex
 
 
 def fig_waist(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:

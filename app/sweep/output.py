@@ -28,6 +28,7 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
+from app.methods import METHOD_INFO
 from app.sweep.grid import Grid
 from app.sweep.measure import (
     LIMIT_COLUMNS,
@@ -37,7 +38,6 @@ from app.sweep.measure import (
     TASK_COLUMNS,
     Task,
 )
-from controller.params import METHOD_INFO
 
 TABLE_CSV = "sweep.csv"
 TABLE_JSONL = "sweep.jsonl"
@@ -273,7 +273,7 @@ def _lines(
     log: bool,
     folder: Path,
 ) -> Path:
-    from controller.params import method_hex
+    from app.methods import method_hex
 
     (axis,) = grid.axes
     numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in axis.values)
