@@ -21,6 +21,7 @@ from app.experiments.runs import Results, case_key, summary_of, zmp_of
 
 BALANCE_LENGTHS = (0.15, 0.20, 0.25, 0.30, 0.35, 0.40)  # [m] Table 1's lengths
 EDGES = ("outer", "inner", "toe", "heel", "two feet")  # where a CoP on an edge sits
+EDGE_MARGIN = 5e-4  # [m] a CoP closer than this to the support polygon's edge is on the edge
 
 
 @dataclass(frozen=True)

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.patches import Rectangle
 
+from app.experiments.balance import EDGE_MARGIN
 from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, plt
 from app.experiments.results import StudyResults
@@ -56,6 +57,18 @@ def fig_zmp(study: Study, results: Results, r: StudyResults, path: Path) -> str 
             color=method_hex("mpc"),
             label="measured ZMP (centre of pressure), 100 Hz",
         )
+        if ex.balance_margin:
+            edge = np.abs(array(ex.balance_margin)) < EDGE_MARGIN
+            a.plot(
+                array(ex.cop_x)[edge],
+                array(ex.cop_y)[edge],
+                ls="none",
+                marker="x",
+                ms=3.5,
+                mew=0.8,
+                color="k",
+                label=f"CoP on a sole's edge (margin < {EDGE_MARGIN * 1000:.1f} mm)",
+            )
         a.plot(
             array(ex.com_des_x),
             array(ex.com_des_y),
@@ -70,7 +83,7 @@ def fig_zmp(study: Study, results: Results, r: StudyResults, path: Path) -> str 
     ax.set_xlim(feet[:, 0].min() - 0.25, feet[:, 0].max() + 0.25)
     ax.set_ylim(-0.3, 0.3)
     ax.set_title(f"whole walk, MPC, step {study.zmp_length:.2f} m (axes not to scale)")
-    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.22), ncol=5, frameon=False)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.22), ncol=3, frameon=False)
     ax_z.set_xlim(zoom[:, 0].min() - 0.2, zoom[:, 0].max() + 0.2)
     ax_z.set_ylim(-0.25, 0.25)
     ax_z.set_aspect("equal")

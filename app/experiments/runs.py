@@ -150,6 +150,7 @@ class ZmpExtract:
     cop_in_planned_support: float
     cop_in_measured_support: float
     lipm_outside_max_mm: float | None = None  # farthest the LIPM ZMP left the planned support
+    balance_margin: Samples = field(default_factory=list)  # [m] CoP to the polygon's edge
 
 
 @dataclass(frozen=True)

@@ -17,7 +17,7 @@ from typing import Any
 
 import numpy as np
 
-from app.experiments.balance import EDGES
+from app.experiments.balance import EDGE_MARGIN, EDGES
 from app.experiments.runs import (
     Extracts,
     RunResult,
@@ -45,10 +45,10 @@ ZMP_COLUMNS = (
     "zmp_ref_x",
     "zmp_ref_y",
     "zmp_in_support",
+    "balance_margin",
 )
 DOWNSAMPLE = 2  # walking-phase extracts at 100 Hz
 LANDING_WINDOW = 0.05  # [s] kappa "at landing / lift-off" = max within +/- this of the event
-EDGE_MARGIN = 5e-4  # [m] a CoP closer than this to the support polygon's edge is on the edge
 
 
 def _event_peaks(t: np.ndarray, kappa: np.ndarray, events: np.ndarray) -> list[float | None]:
