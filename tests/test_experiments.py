@@ -229,3 +229,19 @@ def test_experiments_without_ray_is_one_line(tmp_path, capsys, monkeypatch):
     assert main(["experiments", "--quick", "--ray", "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err.strip()
     assert err.count("\n") == 0 and "pelvic-walk[cluster]" in err
+
+
+def test_a_runs_command_is_a_valid_simulate_command():
+    """The command results.json lists for a run parses as ``pelvic-walk simulate`` and asks
+    for the run's parameters and seed."""
+    import shlex
+
+    from app.cli import build_parser
+    from app.params_cli import params_from_args
+
+    spec = RunSpec("mpc", 0.35, 20, False, 7, (("pelvis.k_pel", 0.45), ("walk.dsp_ratio", 0.3)))
+    argv = shlex.split(spec.command())
+    assert argv[:2] == ["pelvic-walk", "simulate"]
+    args = build_parser().parse_args(argv[1:])
+    assert args.seed == 7
+    assert params_from_args(args, method=args.method) == spec.params()

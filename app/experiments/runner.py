@@ -151,7 +151,9 @@ def main(out: Path, quick: bool = False, jobs: int | None = None, ray: str | Non
         duration_s=time.perf_counter() - t0,
         run_seconds_total=sum(r.wall_s for r in runs.results.values())
         + (runs.sensitivity.duration_s if runs.sensitivity else 0.0),
-        n_runs=len(runs.results) + (runs.sensitivity.n_runs if runs.sensitivity else 0),
+        n_runs=len(runs.results)
+        + (runs.sensitivity.n_runs if runs.sensitivity else 0)
+        + sum(p.runs for p in runs.pushes.values() if p),
         jobs=n_jobs,
         cpu_count=os.cpu_count(),
         machine=f"{platform.machine()}, {platform.python_implementation()} "
