@@ -50,9 +50,10 @@ def _limits(study: Study, r: StudyResults) -> str | None:
         f"{_m(f)}, redundancy {_m(red)}, MPC {_m(m)} m, the MPC {m - f:+.2f} m over the fixed "
         f"pelvis ({100 * (m / f - 1):+.0f} %); the paper: "
         + " / ".join(f"{paper.MAX_STEP[k]:.2f}" for k in ("fixed", "redundancy", "mpc"))
-        + f" m (+{GAIN:.2f} m). Our fixed pelvis reaches farther than the paper's, so the gain "
-        "is smaller."
+        + f" m (+{GAIN:.2f} m)."
     )
+    if f > paper.MAX_STEP["fixed"] + 1e-9 and m - f < GAIN - 1e-9:
+        text += " Our fixed pelvis reaches farther than the paper's, so the gain is smaller."
     s = r.sensitivity
     best = s.best_gain() if s else None
     if s and best:
@@ -110,8 +111,8 @@ def _waist(study: Study, r: StudyResults) -> str | None:
         f"**Waist (Fig. 8-9): the early turn {c.verdict}.** The MPC's turn toward the coming "
         f"swing starts {d['mpc_lead']:.2f} s before lift-off, redundancy's {d['red_lead']:+.2f} "
         f"s (rate at lift-off {d['mpc_rate']:+.0f} vs {d['red_rate']:+.0f} deg/s toward the "
-        f"swing). Its size is small: the MPC's waist moves {d['mpc_share']:.1f} % of its range "
-        f"in the DSP, {d['mpc_of_sine']:.0%} of what a sine over the step moves."
+        f"swing). Its size: the MPC's waist moves {d['mpc_share']:.1f} % of its range in the "
+        f"DSP, {d['mpc_of_sine']:.0%} of what a sine over the step moves."
     )
     if amp and amp.measured:
         text += (
