@@ -89,6 +89,13 @@ class World:
         self._tau_buf = np.empty((self.n_substeps, n))  # [N m] per substep
         self._qd_buf = np.empty((self.n_substeps, n))  # [rad/s] per substep
         self._energy_buf = np.empty((self.n_substeps + 1, n))  # running sum, see step()
+        # Views of MjData's own buffers (MuJoCo never moves them), read after every substep
+        # (a fresh view per read costs more than the copy). The model lists the joints and
+        # their actuators in one contiguous order (models/dyros_jet/robot.xml).
+        if not (isinstance(self._act_sel, slice) and isinstance(self._qvel_sel, slice)):
+            raise ValueError(f"{xml}: the joints' actuators and velocities must be contiguous")
+        self._force_view = self.data.actuator_force[self._act_sel]
+        self._qvel_view = self.data.qvel[self._qvel_sel]
         self.reset()
 
     # -- state -------------------------------------------------------------------------------
@@ -171,15 +178,15 @@ class World:
         m, d = self.model, self.data
         d.ctrl[self.act_idx] = q_target
         tau, qd = self._tau_buf, self._qd_buf
-        act, qv = self._act_sel, self._qvel_sel
+        force_now, qvel_now = self._force_view, self._qvel_view
         for i in range(self.n_substeps):
             mujoco.mj_step(m, d)
             if self._push_left:  # the push acted on this substep; it ends after the last one
                 self._push_left -= 1
                 if not self._push_left:
                     d.xfrc_applied[self.root_id, :3] = 0.0
-            tau[i] = d.actuator_force[act]
-            qd[i] = d.qvel[qv]
+            tau[i] = force_now
+            qd[i] = qvel_now
         # Positive work per substep, added substep by substep: row 0 holds the total so far
         # and the cumulative sum adds the rows in order.
         e = self._energy_buf
