@@ -84,6 +84,7 @@ class World:
         self._foot_side = {int(g): side for side, g in enumerate(self.foot_geom_ids)}
         # Contiguous index ranges as slices (cheaper than fancy indexing every substep).
         self._act_sel = _as_slice(self.act_idx)
+        self._qpos_sel = _as_slice(self.qpos_idx)
         self._qvel_sel = _as_slice(self.qvel_idx)
         n = len(JOINTS)
         self._tau_buf = np.empty((self.n_substeps, n))  # [N m] per substep
@@ -132,7 +133,7 @@ class World:
         return float(self.data.time)
 
     def q_joints(self) -> np.ndarray:
-        return self.data.qpos[self.qpos_idx].copy()
+        return self.data.qpos[self._qpos_sel].copy()
 
     def qd_joints(self) -> np.ndarray:
         return self.data.qvel[self.qvel_idx].copy()
