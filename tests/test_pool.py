@@ -63,9 +63,46 @@ def test_a_session_split_across_workers_keeps_step(pool):
         before = [r.t for r in f.robots]
         f = s.wait_applied(s.step(), timeout=20)
         assert [round(r.t - b, 6) for r, b in zip(f.robots, before, strict=True)] == [0.005] * 3
+        # a restart while paused (the parts may stand at different clocks): on resume every
+        # robot starts at the same session clock, none stands by a step cycle
+        s.wait_applied(s.reset(), timeout=20)
+        f = s.wait_applied(s.resume(), timeout=20)
+        while f is not None and any(r.t < 0.5 for r in f.robots):
+            f = s.wait_frame(f.seq, timeout=30)
+        assert f is not None and not any(r.waiting for r in f.robots)
+        starts = [r.clock - r.t for r in f.robots]
+        assert max(starts) - min(starts) < 0.011, starts
     finally:
         pool.close(s)
     assert pool.robots() == 0
+
+
+def test_a_fall_restarts_every_part_of_the_session_together(pool):
+    """The robots run in different worker processes: the session (where their frames meet)
+    restarts them all FALL_HOLD_S after one fell, at one session clock."""
+    from app.live import FALL_HOLD_S
+
+    s = pool.open(initial_intent(PARAMS, ["fixed", "mpc"]), sid="fall")
+    try:
+        assert len(set(s.worker_pids)) == 2
+        f = _walked(s, 3.0)
+        s.wait_applied(s.push("mpc", (0.0, 300.0), 0.2), timeout=20)
+        while f is not None and not f.robots[1].fell:
+            f = s.wait_frame(f.seq, timeout=30)
+        assert f is not None
+        fell_at = f.robots[1].fell_clock
+        while f is not None and f.robots[1].fell:
+            last, f = f, s.wait_frame(f.seq, timeout=30)
+        assert f is not None and last.clock >= fell_at + FALL_HOLD_S - 1e-9
+        while f is not None and any(r.t < 0.5 for r in f.robots):
+            f = s.wait_frame(f.seq, timeout=30)
+        assert f is not None and not any(r.fell or r.waiting for r in f.robots)
+        starts = [r.clock - r.t for r in f.robots]
+        assert max(starts) - min(starts) < 0.011, starts
+        assert starts[0] >= fell_at + FALL_HOLD_S
+        assert s.intent.auto_restarts == 1
+    finally:
+        pool.close(s)
 
 
 def test_admission_and_closing_free_the_slots(pool):

@@ -289,3 +289,37 @@ def test_the_panel_the_state_and_the_sessions_list_agree_after_every_transition(
     assert agree(False, False)["speed"] == 2.0
     assert "Running at 2x" in read()[3]
     client.put("/api/sim/speed", json={"speed": 1.0})
+
+
+def test_a_students_panel_is_read_only_and_says_why(panel_view):
+    """With an instructor, a student's view of the shared demo: every control that changes
+    the session is disabled, a click that still arrives is refused with a message, and what
+    is the viewer's own (camera, layers, recording) stays enabled."""
+    import viser
+
+    from app.live.registry import SessionRegistry
+    from app.local_server import free_port
+    from app.web.lessons import PRESETS
+    from app.web.panel import READ_ONLY_NOTE, REFUSED
+    from app.web.view import View
+
+    sim, _view, _client = panel_view
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        view = View(server, sim, SessionRegistry.around(sim), read_only=True)
+        panel = view.panel
+        assert READ_ONLY_NOTE in panel.notice.content and panel.notice.visible
+        assert panel.writers and all(h.disabled for h in panel.writers)
+        assert panel.controls[("walk", "step_length")][0].disabled
+        assert all(b.disabled for b in panel.learn.buttons)
+        assert not any(b.disabled for b in panel.layer_boxes.values())
+        assert not panel.record.button.disabled
+        version = sim.intent.version
+        panel._step("5 ms tick")
+        panel._toggle_pause()
+        panel.learn.start(5)
+        panel.apply_preset(next(iter(PRESETS)))
+        assert sim.intent.version == version  # nothing reached the session
+        assert panel._message == REFUSED
+    finally:
+        server.stop()

@@ -96,6 +96,14 @@ class RemoteSession(SessionView):
         self.pool.reserve(self, methods)
         return super().set_methods(methods)
 
+    def _newest_clock(self) -> float | None:
+        """The fastest part's newest clock (the merged frame shows the slowest part's): a
+        paused session's parts stand at different clocks, and after the time base moved back
+        to a slow part the others run ahead of it."""
+        with self._merge_lock:
+            clocks = [r[-1].clock for r in self._recent.values() if r]
+        return max(clocks) if clocks else super()._newest_clock()
+
     def _intent_changed(self) -> None:
         intent = self.intent
         self.pool.sync_parts(self, intent)

@@ -165,7 +165,8 @@ class SessionView:
         methods = check_methods(methods)
         if methods == self.intent.methods:
             return self.intent
-        return self._box.modify(lambda cur: {"methods": methods, **self._restart_at(cur)})
+        newest = self._newest_clock()  # read before the intent's lock (lock order)
+        return self._box.modify(lambda cur: {"methods": methods, **self._restart_at(cur, newest)})
 
     def set_speed(self, speed: float) -> Intent:
         speed = check_speed(speed)
@@ -193,13 +194,22 @@ class SessionView:
         clock = frame.clock if cur.paused and frame is not None else self.clock_now(cur)
         return (self._wall(), clock)
 
-    def _restart_at(self, cur: Intent) -> dict:
-        """Fields that rebuild every robot, to start together ``start_delay`` from now."""
+    def _restart_at(self, cur: Intent, newest: float | None) -> dict:
+        """Fields that rebuild every robot, to start together ``start_delay`` from now, and
+        never before a loop's present: a loop already past the start would have its robots
+        stand by for a whole step cycle to keep the rhythm, two steps behind the others."""
         delay = 0.0 if cur.paused else self.start_delay * cur.speed  # wall s -> session s
+        now = self.clock_now(cur)
         return {
             "reset_requests": cur.reset_requests + 1,
-            "start_clock": self.clock_now(cur) + delay,
+            "start_clock": max(now, newest if newest is not None else now) + delay,
         }
+
+    def _newest_clock(self) -> float | None:
+        """[s] the newest session clock a loop of the session has reached (published). Not
+        called under the intent's lock: a session's frame merger takes its own lock first."""
+        frame = self.frame()
+        return frame.clock if frame is not None else None
 
     def step(self, until: str = "tick") -> Intent:
         """Pause (if running) and advance one tick, or to the next lift-off or landing."""
@@ -217,7 +227,8 @@ class SessionView:
     def reset(self) -> Intent:
         """Restart every robot from standing (t = 0), all together."""
         self._shown = None
-        return self._box.modify(self._restart_at)
+        newest = self._newest_clock()
+        return self._box.modify(lambda cur: self._restart_at(cur, newest))
 
     def _restart_when_due(self, frame: LiveFrame) -> None:
         """The session's own restart: all robots together, ``FALL_HOLD_S`` after a robot fell
@@ -240,10 +251,12 @@ class SessionView:
         if not due:
             return
 
+        newest = self._newest_clock()
+
         def restart(cur: Intent) -> dict:
             if cur.paused or cur.reset_requests != intent.reset_requests:
                 return {}  # paused meanwhile, or restarted by someone: nothing to add
-            return {**self._restart_at(cur), "auto_restarts": cur.auto_restarts + 1}
+            return {**self._restart_at(cur, newest), "auto_restarts": cur.auto_restarts + 1}
 
         self._auto_version = self._box.modify(restart).version
 

@@ -207,11 +207,18 @@ class LearnTab:
         intent = self.panel.session.intent
         change = (intent.params, intent.methods, intent.reset_requests - intent.auto_restarts)
         if change != self._change:  # the "max seen" columns count from here
-            restarted = self._change is None or change[2] != self._change[2]
+            first = self._change is None
+            restarted = first or change[2] != self._change[2]  # type: ignore[index]
             self._change, self._change_version = change, intent.version
             self.tallies = {}
-            # after a restart, from the robots' start; after a new setting, from now
-            self.since = max(frame.clock, intent.start_clock) if restarted else frame.clock
+            # from the lesson's start, the robots' restart or (a new setting) now
+            self.since = (
+                self.start_clock
+                if first
+                else max(frame.clock, intent.start_clock)
+                if restarted
+                else frame.clock
+            )
         counted = frame.intent_version >= self._change_version and frame.clock >= self.since
         if frame.seq != self._last_seq and not frame.paused and counted:
             self._last_seq = frame.seq
@@ -274,6 +281,8 @@ class LearnTab:
             v = recent[:, COL[name]]
             return v[np.isfinite(v)]
 
+        if r.fell and key not in ("status", "falls", "step", "arms", "settings", "shares"):
+            return "-"  # lying on the floor: its measurements say nothing of the walk
         if key == "status":
             if r.fell and r.fell_clock is not None:
                 return (

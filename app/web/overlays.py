@@ -26,7 +26,7 @@ REFERENCE = (205, 30, 70)  # crimson
 PREDICTED = (120, 50, 200)  # purple
 MEASURED = (20, 20, 20)  # black
 PLAN = (120, 120, 120)  # grey
-DANGER = (240, 0, 0)  # bright red
+DANGER = (255, 0, 0)  # bright red (a straight leg's gauge ends at a darker (210, 0, 0))
 PREDICTION = PREDICTED  # the CoM path and the MPC's hip lines
 GROUND = PLAN  # footholds, swing path
 SUPPORT = (40, 40, 40)  # the support polygon: the plan's, darker (it is under the robot)
@@ -41,9 +41,10 @@ FOOTHOLD_WINDOW = 1.2  # [m] footholds drawn ahead of and behind the robot
 
 
 def reach_color(reach: float) -> tuple[int, int, int]:
-    """Grey while the knee is bent (reach <= 0.85), to red as the leg straightens (1.0)."""
+    """Grey while the knee is bent (reach <= 0.85), to red as the leg straightens (1.0): a
+    darker red than the fall ring's, which no leg reaches."""
     f = float(np.clip((reach - 0.85) / 0.15, 0.0, 1.0)) if math.isfinite(reach) else 0.0
-    return (int(150 + 90 * f), int(150 - 150 * f), int(150 - 150 * f))
+    return (int(150 + 60 * f), int(150 - 150 * f), int(150 - 150 * f))
 
 
 def rectangle_segments(centres: np.ndarray, size: tuple[float, float], z: float) -> np.ndarray:

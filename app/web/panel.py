@@ -37,7 +37,7 @@ from app.web.lessons import PRESETS, warnings_for
 from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.record_gui import RecordFolder
-from app.web.scene import LAYERS
+from app.web.scene import LAYERS, fall_note
 from controller.params import GROUP_TITLES, GROUPS, METHODS, ControllerParams, spec
 
 if TYPE_CHECKING:
@@ -141,9 +141,9 @@ class ControlPanel:
         with gui.add_folder("Playback"):
             self.pause_button = self.writer(gui.add_button("Pause", icon=viser.Icon.PLAYER_PAUSE))
             self.pause_button.on_click(lambda _e: self._toggle_pause())
-            row = self.writer(
-                gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
-            )
+            # (viser cannot disable a button group: on a read-only panel a click is refused
+            # with a message instead, as any callback there is)
+            row = gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
             row.on_click(lambda e: self._step(e.target.value))
             self.timeline = gui.add_slider(  # enabled while paused (see reflect)
                 "Timeline [s] (when paused)",
@@ -415,7 +415,9 @@ class ControlPanel:
         lines = [playback.describe()]
         for r in frame.robots:
             if r.fell:
-                state = "down (the session restarts every robot soon)"
+                when, why, restart = fall_note(r, frame)
+                lines.append(f"**{METHOD_INFO[r.method].title}**: ⚠ fell {when}, {why}; {restart}")
+                continue
             elif r.waiting:
                 state = "standing by to start in phase"
             elif r.finished:

@@ -14,7 +14,8 @@ change; overlays are refreshed at ``OVERLAY_HZ`` and labels at ``LABEL_HZ``. Eac
 its method's colour (``app.methods.METHOD_INFO``) on its torso and head; the overlays use one
 colour per meaning (``app.web.overlays``), never a method colour.
 
-Layout: robot ``slot`` i of n walks at y = ((n - 1) / 2 - i) * ``ROBOT_SPACING``; the world
+Layout: robot ``slot`` i of n walks at y = ((n - 1) / 2 - i) * ``ROBOT_SPACING`` (seen from
+the side, at x = (i - (n - 1) / 2) * ``ROBOT_SPACING``, the first one hindmost); the world
 (robots, overlays, floor) is shifted back in x to the middle of the robots' progress (the
 middle between the hindmost and the foremost), so every robot stays in view, a fallen one
 lying behind the others included, while the footholds and the floor stay fixed to the ground.
@@ -270,7 +271,10 @@ class SceneView:
         n = len(robots)
         y = np.array(
             [
-                (slot_offset(i, n), 0.0) if self.along_x else (0.0, slot_offset(i, n))
+                # seen from the side, the first robot (the fixed pelvis, the one that falls in
+                # the lessons) walks last in the row: the others walk on away from it, not
+                # into it
+                (-slot_offset(i, n), 0.0) if self.along_x else (0.0, slot_offset(i, n))
                 for i in range(n)
             ]
         )  # (n, 2) each robot's offset in x, y
@@ -326,8 +330,13 @@ class SceneView:
                 )
             )
         if on["prediction"]:
-            pred_pts, pred_cols = colored(
-                [pair for r, yi in zip(robots, y, strict=True) for pair in robot_prediction(r, yi)]
+            pred_pts, pred_cols = colored(  # a robot on the floor predicts nothing
+                [
+                    pair
+                    for r, yi in zip(robots, y, strict=True)
+                    if not r.fell
+                    for pair in robot_prediction(r, yi)
+                ]
             )
             ov["prediction"].set(points=pred_pts, colors=pred_cols)
         if on["falls"]:
@@ -354,7 +363,8 @@ class SceneView:
         if on["momentum"]:
             arrows = []
             for r, yi in zip(robots, y, strict=True):
-                length = float(np.clip(MOMENTUM_SCALE * r.yaw_momentum, -1.0, 1.0))
+                momentum = 0.0 if r.fell else r.yaw_momentum  # its arrow is over its head
+                length = float(np.clip(MOMENTUM_SCALE * momentum, -1.0, 1.0))
                 base = np.array([r.com[0] + yi[0], yi[1], 1.75])
                 arrows.append([base, base + (0.0, 0.0, length if abs(length) > 0.01 else 0.01)])
             ov["momentum"].set(points=np.array(arrows, np.float32))
@@ -412,24 +422,32 @@ def stagger_x(robots: tuple[RobotFrame, ...]) -> float:
     return 0.0 if spread < 0.3 else STAGGER_STEP * math.ceil(spread / STAGGER_STEP)
 
 
+def fall_note(r: RobotFrame, frame: LiveFrame) -> tuple[str, str, str]:
+    """(when, why, restart) of a fallen robot, for its label and the status line: "at t =
+    3.1 s", "torso tilted over 30°", "all robots restart in 2.4 s"."""
+    when = f"at t = {r.fell_clock:.1f} s" if r.fell_clock is not None else ""
+    why = (r.fall_reason or "fell").replace(" deg", "°")
+    if r.fell_clock is None:
+        return when, why, "all robots restart soon"
+    left = r.fell_clock + FALL_HOLD_S - frame.clock
+    if frame.paused:
+        restart = (
+            "all robots restart when you resume"
+            if left <= 0
+            else f"all robots restart {left:.1f} s after you resume"
+        )
+    else:
+        restart = f"all robots restart in {max(left, 0.0):.1f} s"
+    return when, why, restart
+
+
 def label_text(r: RobotFrame, frame: LiveFrame) -> str:
     """Method, status badge and live numbers, above the robot; when it fell, when and why,
     and when the session restarts every robot."""
     head = METHOD_INFO[r.method].title
     if r.fell:
-        when = f" at t = {r.fell_clock:.1f} s" if r.fell_clock is not None else ""
-        why = (r.fall_reason or "fell").replace(" deg", "°")
-        if r.fell_clock is None:
-            restart = "all robots restart soon"
-        else:
-            left = r.fell_clock + FALL_HOLD_S - frame.clock
-            restart = (
-                "all robots restart when you resume"
-                if frame.paused and left <= 0
-                else f"all robots restart in {max(left, 0.0):.1f} s"
-                + (" of running" if frame.paused else "")
-            )
-        return f"⚠ {head} FELL{when}\n{why}\n{restart}"
+        when, why, restart = fall_note(r, frame)
+        return f"⚠ {head} FELL {when}\n{why}\n{restart}"
     if r.waiting:
         return f"{head}\nstanding by to start in phase"
     if r.finished:
