@@ -37,32 +37,6 @@ DSP_SPLITS: tuple[str, ...] = ("start", "both_ends")
 CONTROL_DT = 0.005  # [s] the paper's 200 Hz control period (every layer, every QP)
 
 
-@dataclass(frozen=True)
-class MethodInfo:
-    """How a walking method is named and drawn everywhere (scene, plots, report, page)."""
-
-    name: str  # the ``method`` value
-    title: str  # short, for labels and legends
-    label: str  # long, as the paper names it
-    color: tuple[int, int, int]  # RGB; no other overlay of the scene uses these hues
-
-
-# Okabe-Ito colours (distinguishable with the common colour-vision deficiencies).
-METHOD_INFO: dict[str, MethodInfo] = {
-    "fixed": MethodInfo("fixed", "fixed pelvis", "fixed pelvis (W/O rotation)", (0, 114, 178)),
-    "redundancy": MethodInfo(
-        "redundancy", "redundancy", "rotation by redundancy [21]", (230, 159, 0)
-    ),
-    "mpc": MethodInfo("mpc", "pelvic MPC", "rotation by MPC (proposed)", (0, 158, 115)),
-}
-
-
-def method_hex(method: str) -> str:
-    """``#rrggbb`` of a method's colour (matplotlib, HTML)."""
-    r, g, b = METHOD_INFO[method].color
-    return f"#{r:02x}{g:02x}{b:02x}"
-
-
 def _f(default: float, lo: float, hi: float, step: float, unit: str, label: str, **kw: Any) -> Any:
     """A float field with its range, slider step, unit and label as metadata."""
     meta = {"min": lo, "max": hi, "step": step, "unit": unit, "label": label, **kw}
