@@ -170,3 +170,33 @@ def test_a_part_is_shown_at_its_newest_frame_not_later_than_the_instant():
     assert _at(recent, 1.2).clock == 1.2
     assert _at(recent, 5.0).clock == 1.3
     assert _at(recent, 0.5).clock == 1.0  # ran ahead beyond the kept window: its oldest
+
+
+def test_without_a_shared_demo_every_slot_is_for_private_sessions(pool):
+    """``serve --sessions private --no-shared-demo``: no shared session holds slots; the API
+    says so in one line where the shared session is asked for."""
+    from fastapi.testclient import TestClient
+
+    registry = SessionRegistry.start(
+        "private", initial_intent(PARAMS, ["fixed", "mpc"]), pool, shared_demo=False
+    )
+    app = create_app(registry)
+    try:
+        assert not registry.has_shared and pool.robots() == 0
+        with TestClient(app) as client:
+            r = client.get("/api/state")
+            assert r.status_code == 404 and "no shared demo" in r.json()["detail"]
+            health = client.get("/api/health").json()
+            assert health["status"] == "ok" and health["shared_demo"] is False
+            assert health["sessions"] == 0
+            listed = client.get("/api/sessions").json()
+            assert listed["shared_demo"] is False and listed["sessions"] == []
+            opened = [client.post("/api/sessions").json()["id"] for _ in range(2)]
+            assert pool.robots() == 4 == pool.capacity  # every slot a student's
+            assert client.post("/api/sessions").status_code == 503  # full: said so
+            sid = opened[0]
+            assert client.get(f"/api/sessions/{sid}/state").status_code == 200
+            assert client.post(f"/api/sessions/{sid}/sim/pause").json()["paused"] is True
+    finally:
+        registry.shutdown()
+    assert pool.robots() == 0

@@ -24,6 +24,7 @@ from __future__ import annotations
 import html
 import math
 import threading
+import time
 from typing import TYPE_CHECKING, Any
 
 import viser
@@ -44,6 +45,7 @@ if TYPE_CHECKING:
     from app.web.view import View
 
 STATUS_HZ = 2.0  # status text refreshes per second while running
+MESSAGE_S = 10.0  # [s] a one-off message (a refusal, a push done) stays in the status area
 READ_ONLY_NOTE = (
     "**The instructor drives this demo.** The controls that change the robots are off "
     "here; the camera, layers, plots, inspector and recording are yours."
@@ -88,6 +90,7 @@ class ControlPanel:
         self.read_only = bool(getattr(view, "read_only", False))
         self.writers: list[Any] = []  # the controls that change the session
         self._message: str | None = None  # a one-off message in the status area
+        self._message_at = -math.inf  # time.monotonic() when it was said (shown MESSAGE_S)
         self._status_time = -math.inf
         gui.main_panel.dock_right()  # docked, not floating over the scene (viser's default)
         gui.configure_theme(
@@ -260,7 +263,7 @@ class ControlPanel:
 
     # -- callbacks (write intent only) -----------------------------------------------------
     def _say(self, message: str) -> None:
-        self._message = message
+        self._message, self._message_at = message, time.monotonic()
         self._reflected_version = -1  # put the controls back at the values in force
 
     def _param_changed(self, group: str, name: str) -> None:
@@ -328,6 +331,7 @@ class ControlPanel:
         except ValueError as exc:
             self._say(f"**Not pushed:** {html.escape(str(exc))}")
             return
+        self._message_at = time.monotonic()
         self._message = (
             f"Pushed **{self.push_robot.value}** {self.push_dir.value} with "
             f"{f:.0f} N for {self.push_time.value:.2f} s."
@@ -430,7 +434,7 @@ class ControlPanel:
             )
         lines += [f"⚠ {w}" for w in warnings_for(intent.params, intent.methods)]
         extra = self.view.alerts()
-        if self._message:
+        if self._message and time.monotonic() - self._message_at < MESSAGE_S:
             extra.append(self._message)
         text = "  \n".join(extra + lines)
         if self.status.content != text:

@@ -142,6 +142,9 @@ class Display:
             else:
                 try:
                     _sid, session = registry.open_private(owner=owner)
+                    notice = (
+                        "**Your own session**: these robots and every control here are yours alone."
+                    )
                 except PoolFull:
                     self.refused += 1
                     n = registry.count_private()

@@ -112,7 +112,7 @@ def create_app(
         recording_router("/api", by_header),
         recording_router("/api/sessions/{sid}", by_path),
         runs_router(runs),
-        pages_router(app, viser_port, reports, instructor),
+        pages_router(app, viser_port, reports, instructor, private=registry.mode == "private"),
     ):
         app.include_router(r)
     mount_docs_assets(app)

@@ -43,6 +43,9 @@ ROLES = {  # the line the page shows under its title, by role
     "student watches what you do.</p>",
     "student": "<p class='role'>The <b>instructor</b> drives the shared demo: watch it here "
     "(your controls for it are off).</p>",
+    "student_private": "<p class='role'>You get <b>robots of your own</b> while the server has "
+    "room (the panel on the right says so); else you watch the shared demo, which the "
+    "<b>instructor</b> drives.</p>",
     "wrong": "<p class='role'><b>That instructor token is wrong</b>: you watch as a student.</p>",
 }
 
@@ -52,7 +55,9 @@ def pages_router(
     viser_port: int,
     report: Callable[[], ReportChoice],
     instructor: Instructor | None = None,
+    private: bool = False,
 ) -> APIRouter:
+    """The pages; ``private``: browsers get sessions of their own (the page says so)."""
     static_dir = package_dir("app.static")
     instructor = instructor or Instructor(None)
     r = router()
@@ -74,7 +79,7 @@ def pages_router(
                 scene_url = f"{viser_url}?websocket={quote(ws, safe='')}"
                 role = "instructor"
             else:
-                role = "wrong" if token else "student"
+                role = "wrong" if token else ("student_private" if private else "student")
         page = (static_dir / "index.html").read_text(encoding="utf-8")
         page = page.replace("{{SCENE_URL}}", html.escape(scene_url, quote=True))
         page = page.replace("{{VISER_URL}}", viser_url)
