@@ -251,8 +251,9 @@ class HorizonInspector:
             title="Pelvic angle over the horizon [deg] (eq. 30-33, 35)",
             series=(
                 x_axis,
+                # the reference drawn last, its dashes over the MPC's line where they coincide
+                viser.uplot.Series(label="theta (MPC, eq. 35)", stroke=pred, width=3),
                 viser.uplot.Series(label="theta_ref (eq. 33)", stroke=ref, width=2, dash=(8, 5)),
-                viser.uplot.Series(label="theta (MPC, eq. 35)", stroke=pred, width=2.5),
             ),
             aspect=2.0,
         )
@@ -316,7 +317,7 @@ class HorizonInspector:
         )
         deg = 180.0 / np.pi
         theta_ref, theta = h.theta_ref * deg, h.theta * deg
-        self.theta.data = (t, theta_ref.astype(f32), theta.astype(f32))
+        self.theta.data = (t, theta.astype(f32), theta_ref.astype(f32))
         horizon = float(h.t[-1])
         self._scale(self.com, "com", horizon, [com_x, left_x, right_x], (-0.2, 0.6))
         self._scale(

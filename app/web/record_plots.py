@@ -13,7 +13,9 @@ from matplotlib.figure import Figure
 
 from app.live.history import COL
 from app.methods import METHOD_INFO, method_hex
-from app.web.plots import PLOTS
+from app.sim.metrics import KAPPA_SINGULAR
+from app.web.overlays import DANGER
+from app.web.plots import LOG_PLOTS, PLOTS
 
 if TYPE_CHECKING:
     from app.web.recording import Recording
@@ -53,6 +55,16 @@ def plots_png(rec: Recording, dpi: int = 100) -> bytes:
         if rows is not None and len(rows):
             for a, b in dsp_spans(rows[:, COL["clock"]] - rec.start, rows[:, COL["in_dsp"]]):
                 ax.axvspan(a, b, color=DSP_GREY, lw=0)
+        if col in LOG_PLOTS:  # as the live plot: a straight knee's 1e8 beside a clean 30
+            ax.set_yscale("log")
+            ax.axhline(
+                KAPPA_SINGULAR,
+                color=tuple(c / 255 for c in DANGER),
+                ls="--",
+                lw=1.2,
+                label=f"knee nearly straight ({KAPPA_SINGULAR:g})",
+            )
+            ax.legend(loc="upper right", fontsize=8)
         lo, hi = ax.get_ylim()
         ax.set_ylim(min(lo, span[0]), max(hi, span[1]))
         ax.set_title(title, fontsize=10, loc="left")
