@@ -323,3 +323,14 @@ def test_a_students_panel_is_read_only_and_says_why(panel_view):
         assert panel._message == REFUSED
     finally:
         server.stop()
+
+
+def test_a_stopped_loop_is_said_in_the_status(panel_view):
+    """A loop that died (its part's thread raised) leaves the last frame on screen: the
+    status says so rather than leaving a frozen view to puzzle the class."""
+    sim, view, _client = panel_view
+    sim.error = "RuntimeError: a test's loop stopped"
+    try:
+        assert any("the simulation stopped: RuntimeError" in a for a in view.alerts())
+    finally:
+        sim.error = None

@@ -61,12 +61,16 @@ class View:
         self.draws = 0
 
     def alerts(self) -> list[str]:
-        """Lines for the status area: workers that died lately (their sessions restarted)."""
+        """Lines for the status area: a loop of this session that stopped (its robots no
+        longer move: said, not left for a frozen view to tell), workers that died lately."""
+        out = []
+        if self.session.error:
+            out.append(f"⚠ the simulation stopped: {self.session.error}")
         pool = self.registry.pool
-        if pool is None:
-            return []
-        now = time.time()
-        return [f"⚠ {d.describe()}" for d in pool.deaths if now - d.time < ALERT_S]
+        if pool is not None:
+            now = time.time()
+            out += [f"⚠ {d.describe()}" for d in pool.deaths if now - d.time < ALERT_S]
+        return out
 
     def draw(self, now: float) -> None:
         """Draw the shown frame if anything changed since the last draw."""
