@@ -200,3 +200,24 @@ def test_without_a_shared_demo_every_slot_is_for_private_sessions(pool):
     finally:
         registry.shutdown()
     assert pool.robots() == 0
+
+
+def test_the_end_of_the_plans_restarts_every_part_together(pool):
+    """Robots in different processes walk their whole (short) plan, stand, and the session
+    restarts them all at one clock: none restarts alone and stands by (a view once stayed
+    on "standing by to start in phase" beside a robot at its plan's end)."""
+    s = pool.open(initial_intent(PARAMS.replace(walk={"n_steps": 1}), ["fixed", "mpc"]))
+    try:
+        f = s.wait_frame(timeout=60)
+        while f is not None and not all(r.walks_completed >= 1 for r in f.robots):
+            f = s.wait_frame(f.seq, timeout=30)
+        assert f is not None
+        while f is not None and any(r.t < 0.5 or r.finished for r in f.robots):
+            assert not any(r.waiting for r in f.robots)
+            f = s.wait_frame(f.seq, timeout=30)
+        assert f is not None
+        starts = [r.clock - r.t for r in f.robots]
+        assert max(starts) - min(starts) < 0.011, starts
+        assert s.intent.auto_restarts >= 1
+    finally:
+        pool.close(s)
