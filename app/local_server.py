@@ -111,8 +111,10 @@ def local_server(
         text=True,
     )
     server = LocalServer(proc, port, viser_port)
+    output = proc.stdout
+    assert output is not None  # stdout=PIPE
     # Drain the output all along (an unread pipe fills and then blocks the server's logging).
-    reader = threading.Thread(target=lambda: server.log.extend(proc.stdout), daemon=True)
+    reader = threading.Thread(target=lambda: server.log.extend(output), daemon=True)
     reader.start()
     try:
         try:
