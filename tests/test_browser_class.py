@@ -157,15 +157,24 @@ def test_lesson6_shows_the_fall_then_every_robot_walks_in_step(tool, page):
         )
         return s if ok else None
 
-    def ring_gone():
-        """The red pixels of a screenshot taken while both walk (the next fall, 3 s into the
-        walk, may come first: then wait for the next restart)."""
+    def paused_walking():
+        """Paused while both walk in step (the next fall comes 3 s into the walk: a pause
+        that lands after it is resumed, and the next restart awaited)."""
         if not walking_in_step():
             return None
-        n = _red_ring_pixels(pg, scene, "class_lesson6_walking.png")
-        return (n,) if walking_in_step() else None
+        _post(tool, "sim/pause")
+        if any(r["fell"] for r in _get(tool, "state")["robots"]):
+            _post(tool, "sim/resume")
+            return None
+        return True
 
-    (after,) = _until(ring_gone, "both robots walking again, in step, on screen")
+    _until(paused_walking, "both robots walking again, in step (paused there)")
+    scene.get_by_text(re.compile(r"Paused at t = ")).first.wait_for(state="visible")
+    after = _until(
+        lambda: (n := _red_ring_pixels(pg, scene, "class_lesson6_walking.png")) < ring / 4 and (n,),
+        "the scene to show the restarted robots (no ring)",
+    )[0]
+    _post(tool, "sim/resume")
     assert after < ring / 4, (ring, after)  # the ring went with the restart
 
 
