@@ -20,6 +20,7 @@ from collections.abc import Sequence
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 
+import mujoco
 import numpy as np
 
 from app.sim.session import RunConfig, Session
@@ -84,6 +85,7 @@ def run_push(
     along = np.array([dx, dy])
 
     def com_speed() -> float:  # the whole body's CoM velocity along the push [m/s]
+        mujoco.mj_subtreeVel(world.model, world.data)  # MuJoCo's step leaves it stale
         return float(world.data.subtree_linvel[world.root_id][:2] @ along)
 
     pushed, v_before, v_after = False, 0.0, None

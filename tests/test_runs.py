@@ -71,3 +71,26 @@ def test_runs_in_threads_at_once_match_a_run_alone():
         th.join()
     for s in out:
         _same(alone, s)
+
+
+def test_the_lipm_zmp_reads_this_periods_com_velocity():
+    """MuJoCo's step does not compute subtree_linvel (mj_subtreeVel does, on demand): the
+    measurement must read it after this period's call, not the period before's value."""
+    import mujoco
+    import numpy as np
+
+    from app.runs import Session
+
+    params = ControllerParams().replace(method="mpc", walk={"step_length": 0.3, "n_steps": 2})
+    session = Session(RunConfig(params=params))
+    world = session.world
+    before = None
+    for _ in range(300):  # into the first step: the CoM accelerates
+        session.tick()
+        read = session._com_vel_prev.copy()
+        mujoco.mj_subtreeVel(world.model, world.data)
+        fresh = world.data.subtree_linvel[world.root_id][:2].copy()
+        np.testing.assert_array_equal(read, fresh)
+        if before is not None:
+            assert not np.array_equal(fresh, before)  # a stale read would have differed
+        before = fresh

@@ -199,6 +199,10 @@ class Session:
         world = self.world
         contacts = world.contacts()
         com = world.com()
+        # MuJoCo's step leaves subtree_linvel as the last mj_subtreeVel left it (the period
+        # before): yaw_momentum runs mj_subtreeVel, so read the CoM velocity after it, and the
+        # LIPM ZMP's acceleration pairs this period's velocities with this period's CoM.
+        yaw_momentum = world.yaw_momentum()
         vel = world.data.subtree_linvel[world.root_id][:2].copy()
         acc = (
             np.zeros(2)
@@ -222,7 +226,7 @@ class Session:
             sole_tilt=tilt,
             com=com,
             lipm_zmp=com[:2] - (com[2] / GRAVITY) * acc,
-            yaw_momentum=world.yaw_momentum(),
+            yaw_momentum=yaw_momentum,
             energy=float(world.energy_ctrl_per_joint.sum()),
             energy_substep=float(world.energy_substep_per_joint.sum()),
         )
