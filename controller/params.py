@@ -32,7 +32,7 @@ METHODS: tuple[str, ...] = ("fixed", "redundancy", "mpc")
 # Readings of the lateral distance Delta d_{FP,i,y} of eq. (31)-(32): controller/pelvis_reference.py
 LATERAL_MODES: tuple[str, ...] = ("current", "nominal", "predicted")
 # Where a step's double support lies: all at its start (our plan) or half at each end (the
-# authors' implementation, SPEC.md section 7): controller/footsteps.py
+# authors' public implementation): controller/footsteps.py, docs/DESIGN.md
 DSP_SPLITS: tuple[str, ...] = ("start", "both_ends")
 CONTROL_DT = 0.005  # [s] the paper's 200 Hz control period (every layer, every QP)
 
@@ -146,8 +146,8 @@ class PelvisMpcParams:
         "current",
         LATERAL_MODES,
         "Lateral distance (eq. 31-32)",
-        help="current: pelvis-to-foot now, held over the horizon (the paper's Delta d_{FP,i,y}); "
-        "predicted: per horizon sample; nominal: half the step width",
+        help="current: pelvis (the CoM MPC's state) to foot now, held over the horizon (the "
+        "paper's Delta d_{FP,i,y}); predicted: per horizon sample; nominal: half the step width",
     )
     lateral_floor: float = _f(
         0.03,

@@ -12,17 +12,32 @@ Paper symbols -> code names:
     k_pel                               -> ``k_pel``
     theta_pel^ref(k) (eq. 30, 33)       -> the returned array (N,) [rad]
 
-Choices where the paper is vague (SPEC sections 1 and 6):
+Choices where the paper is vague (docs/DESIGN.md):
 - **Lateral distance** (``PelvisMpcParams.lateral_distance``): eq. (31)-(32) write
   Delta d_{FP,i,y} with the time index i and no k. Three readings:
-  ``current`` (the paper's, read literally): the pelvis-to-foot lateral distance at tick i,
-  from the CoM estimate and the feet now, held over the horizon; ``predicted``: per horizon
-  sample k, from the predicted CoM and the planned feet; ``nominal``: half the step width,
-  constant. ``current`` and ``predicted`` keep each distance at least ``lateral_floor`` from
-  zero (sign kept: left foot +, right foot -): when the CoM sways over a support foot its
-  distance to that foot shrinks to a few centimetres, and atan(k_pel dx / dy) would let that
-  foot's small dx swing the angle. ``nominal`` makes the reference stationary when the pelvis
-  is midway between the feet, so the pelvis barely turns in the DSP (SPEC.md section 2.6).
+  ``current`` (the default, the paper's read literally): the pelvis-to-foot lateral distance
+  at tick i, held over the horizon, with the pelvis at the CoM MPC's own state now (the CoM the
+  MPC plans from, the same model eq. (27) predicts with); ``predicted``: per horizon sample
+  k, from the predicted CoM and the planned feet; ``nominal``: half the step width, constant.
+  None of the three reads a measurement, so sensor noise and pushes never enter theta_ref
+  (they reach the pelvis through eq. (19) only). ``current`` and ``predicted`` keep each
+  distance at least ``lateral_floor`` from zero (sign kept: left foot +, right foot -): when
+  the CoM sways over a support foot its distance to that foot shrinks to a few centimetres,
+  and atan(k_pel dx / dy) would let that foot's small dx swing the angle; at the paper's step
+  width the CoM MPC's sway stops 3.2 cm from the foot, so the 3 cm floor is a guard for
+  narrower steps. ``nominal`` makes the reference stationary when the pelvis is midway
+  between the feet, so the pelvis barely turns in the DSP.
+  Why ``current`` on the CoM MPC's state: it is the reading with the paper's early turn (the
+  waist turns toward the coming swing from the start of the DSP: at 0.40 m the rate toward
+  the swing at lift-off is +19.5 deg/s and the DSP moves 5.0 % of the step's waist range,
+  against +8.1 deg/s and 0.2 % (predicted) and +9.4 deg/s and 0.1 % (nominal); unseeded
+  10-step runs, the report's section-3 measure), and it carries no measurement. The three
+  readings are equally robust: over the study's seeded repeats (10 seeds, 20 steps, torso
+  pushes N(0, 5 N) per axis every 0.1 s) at 0.15-0.40 m each has no fall and no landing
+  beyond 2 cm, and undisturbed they walk the same lengths at step times 1.0-1.4 s and DSP
+  shares 0.1-0.3. An earlier ``current`` read the measured CoM; once eq. (19)'s estimate
+  stopped jumping at lift-off and touch-down (``controller/walker.py``), that reading and the
+  MPC's state differ by wiggles at the phase changes only, and gave the same table.
 - **Sign**: a positive yaw (about +z) moves the left hip (at +y) backward. The pelvis must turn
   each hip *toward its own foot* (the forward foot's hip moves forward, so the forward leg's
   hip-to-foot distance shrinks), hence ``theta_ref = -mean(atan(k_pel dx / dy))``. The literal
@@ -55,7 +70,7 @@ def lateral_distances(
     Args:
         mode: ``"current"``, ``"predicted"`` or ``"nominal"`` (module docstring).
         p_pelvis, p_left, p_right: (N, 2) predicted pelvis (= CoM) and planned feet [m].
-        p_pelvis_now, p_left_now, p_right_now: (2,) the CoM estimate and the feet now [m].
+        p_pelvis_now, p_left_now, p_right_now: (2,) the CoM MPC's state and the feet now [m].
         half_width: half the step width [m] (the nominal distance).
         floor: [m] smallest |distance| (``current`` and ``predicted``).
     """
@@ -106,7 +121,7 @@ def reference_pelvic_angles(
     lateral = np.asarray(lateral, dtype=float)
     if lateral[0, 0] <= 0.0 or lateral[0, 1] >= 0.0:  # held over the horizon, or per sample
         raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
-    # eq. (31)-(32) per foot, eq. (30) their mean, with the sign rule of SPEC section 1
+    # eq. (31)-(32) per foot, eq. (30) their mean, with the sign rule of the module docstring
     return -0.5 * np.arctan(k_pel * dx / lateral).sum(axis=1)
 
 

@@ -220,7 +220,6 @@ class Walker:
         # samples (ZMP reference and bounds, feet for step 6): rows of the plan's table.
         com_mpc = self.com_mpc
         plan, times = self._plan_rows(t, p.com.zmp_margin)
-        in_dsp, standing = bool(plan.in_dsp[0]), bool(plan.standing[0])
         h = slice(2, None)  # the horizon's rows
         c1 = clock() if clock else 0.0
 
@@ -232,11 +231,10 @@ class Walker:
         p_world_com_des = self.com_state[0].copy()
         c2 = clock() if clock else 0.0
 
-        # 4. Pelvis position (eq. 19): measured CoM with the support sole at its planned place
-        # (both soles, averaged, while both feet are down).
+        # 4. Pelvis position (eq. 19): measured CoM with the soles at their planned places,
+        # each sole's share following the ZMP reference from one foot to the other.
         feet_now = (plan.p_left[0], plan.p_right[0])
-        support = None if (standing or in_dsp) else int(plan.support_side[0])
-        p_world_com_meas = self._measured_com(q_meas, feet_now, support)
+        p_world_com_meas = self._measured_com(q_meas, feet_now, plan.zmp_ref[0])
         c3 = clock() if clock else 0.0
         p_prev = self.p_world_pelvis_des.copy()
         self.p_world_pelvis_des[:2] += (
@@ -251,7 +249,7 @@ class Walker:
             com_plan.com,
             plan.p_left[h, :2],
             plan.p_right[h, :2],
-            p_world_com_meas[:2],
+            p_world_com_des,  # the CoM MPC's state now (the estimate would feed noise in)
             plan.p_left[0, :2],
             plan.p_right[0, :2],
             p.walk.step_width / 2,
@@ -406,22 +404,25 @@ class Walker:
         return now if prev is None else prev
 
     def _measured_com(
-        self, q_meas: np.ndarray, feet: tuple[np.ndarray, np.ndarray], support: int | None
+        self, q_meas: np.ndarray, feet: tuple[np.ndarray, np.ndarray], zmp_ref: np.ndarray
     ) -> np.ndarray:
-        """CoM from the measured joints, the base placed so the support sole is where planned.
+        """CoM from the measured joints, the base placed so the soles are where planned.
 
-        ``feet`` are the planned left and right soles now; with ``support`` None (both feet
-        down) the two anchored estimates are averaged. One kinematics pass gives the CoM and
-        both soles relative to the base; the base placed by a sole is ``sole - p_pelvis_sole``
-        (what :meth:`RobotKinematics.support_anchored_base` + :meth:`RobotKinematics.com_world`
-        compute in two passes).
+        ``feet`` are the planned left and right soles now. Each sole anchors one estimate (the
+        base placed by a sole is ``sole - p_pelvis_sole``: what
+        :meth:`RobotKinematics.support_anchored_base` + :meth:`RobotKinematics.com_world`
+        compute in two passes); they are blended by :func:`support_share`, which follows the
+        ZMP reference: the support sole alone in single support, a continuous hand-over in the
+        double support. The two estimates differ by a few millimetres (the measured legs do
+        not close the loop between the planned soles exactly); switching between them at
+        lift-off and touch-down made eq. (19) jerk the pelvis sideways by that much within a
+        few ticks, which threw the centre of pressure to the support foot's outer edge.
         """
         p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)
-        if support is not None:
-            return (feet[support] - p_pelvis_soles[support]) + p_pelvis_com
+        w_left = support_share(feet[LEFT], feet[RIGHT], zmp_ref)
         com_l = (feet[LEFT] - p_pelvis_soles[LEFT]) + p_pelvis_com
         com_r = (feet[RIGHT] - p_pelvis_soles[RIGHT]) + p_pelvis_com
-        return 0.5 * (com_l + com_r)
+        return w_left * com_l + (1.0 - w_left) * com_r
 
     def snapshot_params(self) -> ControllerParams:
         """The parameters in force (pending ones included)."""
@@ -430,3 +431,12 @@ class Walker:
     def replace_params(self, **groups) -> None:
         """Convenience: ``w.replace_params(walk=dict(step_length=0.3))``."""
         self.set_params(self.snapshot_params().replace(**groups))
+
+
+def support_share(p_left: np.ndarray, p_right: np.ndarray, zmp_ref: np.ndarray) -> float:
+    """The left sole's share in [0, 1] of the weight: where the ZMP reference lies on the line
+    from the right sole (0) to the left (1). 1 or 0 in single support (the reference sits on
+    the support foot), a linear hand-over in the double support, 0.5 standing between the feet.
+    """
+    d = p_left[:2] - p_right[:2]
+    return float(np.clip((zmp_ref[:2] - p_right[:2]) @ d / (d @ d), 0.0, 1.0))

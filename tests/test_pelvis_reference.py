@@ -3,7 +3,9 @@
 import numpy as np
 import pytest
 
+from controller.params import LATERAL_MODES, ControllerParams
 from controller.pelvis_reference import hip_points, lateral_distances, reference_pelvic_angles
+from models.dyros_jet import ARM_JOINTS
 
 K, HW = 0.25, 0.1215
 NOMINAL = np.array([[HW, -HW]])
@@ -90,3 +92,40 @@ def test_a_wrongly_signed_lateral_distance_is_refused():
         reference_pelvic_angles(
             np.zeros((1, 2)), np.zeros((1, 2)), np.zeros((1, 2)), K, np.array([[-HW, -HW]])
         )
+
+
+def _walker(params):
+    """A controller alone (no physics) at the model's walk-ready pose."""
+    import mujoco
+
+    from controller.kinematics import RobotKinematics
+    from controller.walker import Walker
+    from models.dyros_jet import KEYFRAME, LOWER_JOINTS, ROBOT_XML, SCENE_XML
+
+    model = mujoco.MjModel.from_xml_path(str(SCENE_XML))
+    key = model.key(KEYFRAME)
+    names = LOWER_JOINTS + ARM_JOINTS
+    q0 = np.array([key.qpos[model.jnt_qposadr[model.joint(n).id]] for n in names])
+    return Walker(params, RobotKinematics(ROBOT_XML), q0, key.qpos[:3].copy())
+
+
+@pytest.mark.parametrize("mode", LATERAL_MODES)
+def test_theta_ref_carries_no_measurement_noise(mode):
+    """Every reading of the lateral distance is taken on the CoM MPC's own state and plan:
+    noise on the measured joints reaches the pelvis position (eq. 19) but not theta_ref."""
+    params = ControllerParams().replace(
+        method="mpc",
+        walk={"step_length": 0.3, "n_steps": 3},
+        pelvis={"lateral_distance": mode},
+    )
+    clean, noisy = _walker(params), _walker(params)
+    rng = np.random.default_rng(0)
+    for _ in range(300):  # the standing start, the first DSP and into its single support
+        a = clean.tick(clean.q_cmd.copy())
+        b = noisy.tick(noisy.q_cmd + rng.normal(0.0, 0.005, noisy.q_cmd.shape))
+        np.testing.assert_array_equal(a.lateral, b.lateral)
+        np.testing.assert_array_equal(a.theta_ref, b.theta_ref)
+    assert np.abs(a.theta_ref).max() > np.radians(2.0)  # the reference does turn
+    # the noise did reach the controller: the measured CoM moved the pelvis
+    assert np.abs(a.p_world_pelvis_des - b.p_world_pelvis_des).max() > 1e-4
+    assert np.abs(a.p_world_com_meas - b.p_world_com_meas).max() > 1e-4

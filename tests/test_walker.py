@@ -229,3 +229,40 @@ def test_a_session_measured_at_display_rate_walks_and_measures_as_one_measured_e
     assert lazy.fell == every.fell is False
     assert lazy.energy_at_step_start.keys() == every.energy_at_step_start.keys()
     assert len(lazy.series) == 0 and len(every.series) == 700
+
+
+def test_the_measured_com_hands_over_between_the_soles_without_a_jump():
+    """Eq. (19)'s CoM estimate anchors the measured legs at the planned soles with weights that
+    follow the ZMP reference: the support sole alone in single support, 0.5 standing, and a
+    hand-over no faster than the DSP (switching at lift-off jerked the pelvis sideways)."""
+    from controller.footsteps import LEFT, plan_footsteps
+    from controller.params import CONTROL_DT, WalkParams
+    from controller.walker import support_share
+
+    for split in ("start", "both_ends"):
+        plan = plan_footsteps(WalkParams(step_length=0.3, n_steps=4, dsp_split=split))
+        t = np.arange(0.0, plan.t_end, CONTROL_DT)
+        s = plan.sample(t)
+        w = np.array(
+            [support_share(s.p_left[i], s.p_right[i], s.zmp_ref[i]) for i in range(len(t))]
+        )
+        ssp = s.in_ssp
+        assert ssp.any()
+        np.testing.assert_allclose(w[ssp], (s.support_side[ssp] == LEFT).astype(float), atol=1e-9)
+        assert w[0] == pytest.approx(0.5) and w[-1] == pytest.approx(0.5)
+        dsp = plan.dsp_time / (2 if split == "both_ends" else 1)
+        assert np.abs(np.diff(w)).max() <= CONTROL_DT / dsp + 1e-9
+
+
+def test_the_measured_com_moves_smoothly_at_lift_off_and_touch_down():
+    session = Session(RunConfig(params=_params("fixed", 0.3, 3)))
+    error, phase = [], []  # measured - desired CoM (what eq. 19 corrects), single support
+    while not session.done:
+        out = session.tick()
+        error.append(out.p_world_com_meas[:2] - out.p_world_com_des)
+        phase.append(out.in_ssp)
+    change = np.linalg.norm(np.diff(np.array(error), axis=0), axis=1)
+    edges = np.flatnonzero(np.diff(np.array(phase, dtype=int)))  # lift-offs and touch-downs
+    assert len(edges) >= 6
+    # a switch between the two anchors changed it by 1.5-3 mm in one tick
+    assert change[edges].max() < 0.5e-3, change[edges]
