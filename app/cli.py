@@ -6,16 +6,21 @@ Bad arguments exit with status 2 and one clear line on stderr, never a traceback
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import math
 import os
 import sys
 from pathlib import Path
-from typing import NoReturn
+from typing import TYPE_CHECKING, NoReturn
 
 from app.params_cli import add_param_options, params_from_args, positive_int
 from app.sweep.cli import add_sweep_arguments
+from app.sweep.spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from controller.params import METHODS
+
+if TYPE_CHECKING:
+    from app.sim.session import RunConfig
 
 
 class _Parser(argparse.ArgumentParser):
@@ -32,6 +37,13 @@ def _finite(text: str) -> float:
         raise argparse.ArgumentTypeError(f"not a number: {text!r}") from None
     if not math.isfinite(value):
         raise argparse.ArgumentTypeError(f"must be finite, got {text!r}")
+    return value
+
+
+def _non_negative(text: str) -> float:
+    value = _finite(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"must be >= 0, got {text!r}")
     return value
 
 
@@ -124,7 +136,24 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--method", choices=METHODS, required=True)
     add_param_options(p, required={"walk.step_length"})
-    p.add_argument("--seed", type=int, default=None)
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=None,
+        metavar="N",
+        help=f"run the study's repeat N of this cell: a {SEED_PERTURBATION} rad start "
+        "perturbation and seeded pushes on the torso through the whole run, as `experiments` "
+        "runs it (e.g. --steps 20 --seed 3 reruns a Table 1 run)",
+    )
+    p.add_argument(
+        "--disturbance",
+        type=_non_negative,
+        default=None,
+        metavar="NEWTONS",
+        help=f"[N] size of the seeded pushes: each axis N(0, NEWTONS), renewed every "
+        f"{DISTURBANCE_PERIOD:g} s (default with --seed: the study's {DISTURBANCE:g} N; 0: the "
+        "start perturbation alone; needs --seed)",
+    )
     p.add_argument("--backend", choices=("osqp", "daqp"), default="daqp")
     p.add_argument("--json", type=Path, default=None, help="write the summary here")
     p.add_argument("--csv", type=Path, default=None, help="write the time series here")
@@ -209,20 +238,30 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def simulate_config(args: argparse.Namespace) -> RunConfig:
+    """The run ``simulate`` makes: the study's run of the same cell and seed
+    (``app.runs.spec_of``), with the pushes' size and the QP back-end the options ask for.
+    ValueError on a bad value."""
+    from app.runs import spec_of
+
+    if args.disturbance is not None and args.seed is None:
+        raise ValueError("--disturbance needs --seed (the pushes are drawn from the seed)")
+    params = params_from_args(args, method=args.method)
+    cfg = spec_of(params, args.seed).config()
+    if args.disturbance is not None:
+        cfg = dataclasses.replace(cfg, disturbance=args.disturbance)
+    return dataclasses.replace(cfg, backend=args.backend)
+
+
 def _simulate(args: argparse.Namespace) -> int:
-    from app.runs import RunConfig, run
+    from app.runs import run
 
     try:
-        params = params_from_args(args, method=args.method)
+        cfg = simulate_config(args)
     except ValueError as exc:  # bad parameter values: one line, exit 2, nothing started
         print(f"pelvic-walk simulate: error: {exc}", file=sys.stderr)
         return 2
-    cfg = RunConfig(
-        params=params,
-        seed=args.seed,
-        perturbation=0.01 if args.seed is not None else 0.0,
-        backend=args.backend,
-    )
+    params = cfg.params
     recorder = None
     if args.record:
         from app.web.recording import HeadlessRecorder
@@ -242,6 +281,11 @@ def _simulate(args: argparse.Namespace) -> int:
         f"solver failures {summary['solver_failures']}, "
         f"RTF {summary['realtime_factor'] or 0:.1f}"
     )
+    if cfg.seed is not None:
+        print(
+            f"seed {cfg.seed}: start perturbation {cfg.perturbation:g} rad, pushes "
+            f"N(0, {cfg.disturbance:g} N) per axis every {cfg.disturbance_period:g} s"
+        )
     if summary["fell"]:
         print(f"fell at {summary['fall_time']:.2f} s: {summary['fall_reason']}")
     if args.json:

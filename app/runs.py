@@ -7,13 +7,45 @@ loops it to the end of the plan (or shortly after a fall). The live tool paces t
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Callable
 
 from app.sim.session import RunConfig, Session
 from app.sim.summary import SUMMARY_KEYS
+from app.sweep.spec import OWN_FIELDS, RunSpec
+from controller.params import GROUPS, ControllerParams
 
-__all__ = ["SUMMARY_KEYS", "RunConfig", "Session", "run"]
+__all__ = ["SUMMARY_KEYS", "RunConfig", "Session", "run", "spec_of"]
+
+
+def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:
+    """The study's :class:`RunSpec` of these parameters: its own fields (method, length, steps,
+    arms, seed) and every other parameter that differs from its default as an override.
+
+    ``spec_of(p, n).config()`` is the run the study makes of that cell with seed ``n`` (its
+    repeat n: the same start perturbation, the same pushes from the same stream), so
+    ``simulate --seed n`` and the study build a run with one function and cannot drift.
+    """
+    default = ControllerParams()
+    overrides = []
+    for group in GROUPS:
+        ours, theirs = getattr(params, group), getattr(default, group)
+        for f in dataclasses.fields(ours):
+            name, value = f"{group}.{f.name}", getattr(ours, f.name)
+            if name not in OWN_FIELDS and value != getattr(theirs, f.name):
+                overrides.append((name, value))
+    spec = RunSpec(
+        params.method,
+        params.walk.step_length,
+        params.walk.n_steps,
+        params.arms.enabled,
+        seed,
+        tuple(overrides),
+    )
+    if spec.params() != params:  # a parameter outside the groups (none today)
+        raise ValueError("these parameters have no study run spec")
+    return spec
 
 
 def run(

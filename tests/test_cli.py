@@ -26,6 +26,8 @@ BAD = [
     ["simulate", "--method", "fixed", "--step-length", "0.2", "--json", "/nonexistent/x.json"],
     ["simulate", "--method", "fixed", "--step-length", "0.2", "--csv", "/"],
     ["bench", "--json", "/nonexistent/b.json"],
+    ["simulate", "--method", "mpc", "--step-length", "0.2", "--disturbance", "5"],  # no seed
+    ["simulate", "--method", "mpc", "--step-length", "0.2", "--seed", "1", "--disturbance", "-1"],
 ]
 
 
@@ -75,3 +77,42 @@ def test_analyze_reproduces_the_paper_numbers(tmp_path):
     data = json.loads(out.read_text())
     assert data["step_max_fixed_static"] == pytest.approx(0.31, abs=0.01)
     assert data["step_max_rotation_static"] == pytest.approx(0.42, abs=0.01)
+
+
+TIMING_KEYS = {"wall_time", "realtime_factor", "tick_ms_median", "tick_ms_p99"}
+
+
+def _simulate(tmp_path, *extra: str, length: str = "0.3", steps: str = "3") -> dict:
+    out = tmp_path / f"run{len(list(tmp_path.iterdir()))}.json"
+    argv = ["simulate", "--method", "mpc", "--step-length", length, "--steps", steps]
+    assert main([*argv, *extra, "--json", str(out)]) == 0
+    return json.loads(out.read_text())
+
+
+def test_simulate_seed_runs_the_studys_repeat(tmp_path):
+    """`simulate --seed N` is the study's repeat N of the same cell: every summary key equal."""
+    from app.experiments.worker import execute
+    from app.sweep.spec import RunSpec
+
+    cli = _simulate(tmp_path, "--seed", "4", "--set", "pelvis.k_pel=0.3")
+    spec = RunSpec("mpc", 0.3, 3, True, 4, (("pelvis.k_pel", 0.3),))
+    study = execute(spec, (), 0).summary.as_dict()
+    keys = (set(cli) & set(study)) - TIMING_KEYS
+    assert set(SUMMARY_KEYS) - TIMING_KEYS <= keys
+    assert {k: cli[k] for k in keys} == {k: study[k] for k in keys}
+    assert spec.command().startswith("pelvic-walk simulate --method mpc --step-length 0.3")
+
+
+def test_two_seeds_differ_and_the_disturbance_can_be_sized_or_turned_off(tmp_path):
+    e = {
+        name: _simulate(tmp_path, *extra)["energy_two_step_mean"]
+        for name, extra in {
+            "seed 0": ("--seed", "0"),
+            "seed 1": ("--seed", "1"),
+            "seed 0, 5 N": ("--seed", "0", "--disturbance", "5"),
+            "seed 0, no pushes": ("--seed", "0", "--disturbance", "0"),
+        }.items()
+    }
+    assert abs(e["seed 0"] - e["seed 1"]) > 0.005 * e["seed 0"]  # the repeats are not copies
+    assert e["seed 0, 5 N"] == e["seed 0"]  # 5 N is the study's default
+    assert e["seed 0, no pushes"] != e["seed 0"]
