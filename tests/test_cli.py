@@ -116,3 +116,24 @@ def test_two_seeds_differ_and_the_disturbance_can_be_sized_or_turned_off(tmp_pat
     assert abs(e["seed 0"] - e["seed 1"]) > 0.005 * e["seed 0"]  # the repeats are not copies
     assert e["seed 0, 5 N"] == e["seed 0"]  # 5 N is the study's default
     assert e["seed 0, no pushes"] != e["seed 0"]
+
+
+def test_a_seeded_api_run_is_the_clis_run(tmp_path):
+    """POST /api/runs with a seed runs what `simulate --seed` runs (the study's repeat)."""
+    import time
+
+    from app.web.api.runs import RunManager
+    from controller.params import ControllerParams
+
+    cli = _simulate(tmp_path, "--seed", "2", steps="2")
+    params = ControllerParams().replace(method="mpc", walk={"step_length": 0.3, "n_steps": 2})
+    manager = RunManager()
+    run_id = manager.submit(params, 2)
+    deadline = time.monotonic() + 240
+    while (rec := manager.get(run_id)) is not None and rec["status"] not in ("done", "error"):
+        assert time.monotonic() < deadline
+        time.sleep(0.1)
+    assert rec is not None and rec["status"] == "done", rec
+    api = rec["summary"]
+    assert api["energy_two_step_windows"] == cli["energy_two_step_windows"]
+    assert api["landing_errors"] == cli["landing_errors"]

@@ -63,13 +63,11 @@ class RunManager:
         return run_id
 
     def _work(self, run_id: str, params: ControllerParams, seed: int | None) -> None:
-        from app.runs import RunConfig, run
+        from app.runs import run, spec_of
 
         self._set(run_id, status="running")
         try:
-            cfg = RunConfig(
-                params=params, seed=seed, perturbation=0.01 if seed is not None else 0.0
-            )
+            cfg = spec_of(params, seed).config()  # the CLI's run (a seed: the study's repeat)
             summary = run(cfg, max_wall_s=self.max_wall_s).summary()
             self._set(run_id, status="done", summary=finite(summary))
         except Exception as exc:  # noqa: BLE001 - reported through GET /api/runs/{id}
