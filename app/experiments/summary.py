@@ -176,21 +176,28 @@ def _zmp(study: Study, r: StudyResults) -> str | None:
         f"planned support in {c.measured['lipm_percent']:.1f} % of the walking ticks."
     )
     b = r.balance
-    if b:
-        cases = [x for x in b.cases.values() if x and x.edge_share is not None]
-        if cases:
-            edges: dict[str, int] = {}
-            for x in cases:
-                for k, v in x.edges.items():
-                    edges[k] = edges.get(k, 0) + v
-            top = max(edges, key=lambda k: edges[k]) if any(edges.values()) else None
-            share = float(np.mean([x.edge_share for x in cases]))
-            tilt = max(x.tilt_max_deg or 0.0 for x in cases)
+    cases = [x for x in (b.cases.values() if b else []) if x and x.edge_share is not None]
+    if cases:
+        edges: dict[str, int] = {}
+        for x in cases:
+            for k, v in x.edges.items():
+                edges[k] = edges.get(k, 0) + v
+        top = max(edges, key=lambda k: edges[k]) if any(edges.values()) else None
+        zero = [x for x in cases if x.margin_p5_mm is not None and x.margin_p5_mm < 0.05]
+        share = float(np.mean([x.edge_share for x in cases]))
+        if zero:
             text += (
-                f" The CoP's margin reads 0 mm in many runs because a foot rests on one edge "
-                f"of its sole ({100 * share:.1f} % of walking ticks on average"
+                f" The CoP's margin reads 0 mm in {len(zero)} of {len(cases)} runs (5th "
+                "percentile) because a foot rests on one edge of its sole "
+                f"({100 * share:.1f} % of walking ticks on average"
                 + (f", mostly the {top} edge" if top else "")
-                + f"; tilt up to {tilt:.2f} deg): a genuine roll, not a measuring error."
+                + "): a roll, not a measuring error."
+            )
+        else:
+            p5 = min(x.margin_p5_mm for x in cases if x.margin_p5_mm is not None)
+            text += (
+                f" The CoP keeps a margin to the sole's edge: its 5th percentile is at least "
+                f"{p5:.1f} mm in every run; on an edge in {100 * share:.1f} % of walking ticks."
             )
     return text
 
