@@ -23,21 +23,23 @@ Choices where the paper is vague (docs/DESIGN.md):
   (they reach the pelvis through eq. (19) only). ``current`` and ``predicted`` keep each
   distance at least ``lateral_floor`` from zero (sign kept: left foot +, right foot -): when
   the CoM sways over a support foot its distance to that foot shrinks to a few centimetres,
-  and atan(k_pel dx / dy) would let that foot's small dx swing the angle; at the paper's step
-  width the CoM MPC's sway stops 3.2 cm from the foot, so the 3 cm floor is a guard for
-  narrower steps. ``nominal`` makes the reference stationary when the pelvis is midway
-  between the feet, so the pelvis barely turns in the DSP.
+  and atan(k_pel dx / dy) would let that foot's small dx swing the angle. At the paper's step
+  width the CoM MPC's state comes within 3.0-3.1 cm of the support foot, so the 3 cm floor
+  barely binds (floors of 1 and 5 cm give the same seeded repeats at 0.30 and 0.40 m); it
+  guards narrower steps. ``nominal`` makes the reference stationary when the pelvis is
+  midway between the feet, so the pelvis barely turns in the DSP.
   Why ``current`` on the CoM MPC's state: it is the reading with the paper's early turn (the
   waist turns toward the coming swing from the start of the DSP: at 0.40 m the rate toward
   the swing at lift-off is +19.5 deg/s and the DSP moves 5.0 % of the step's waist range,
-  against +8.1 deg/s and 0.2 % (predicted) and +9.4 deg/s and 0.1 % (nominal); unseeded
-  10-step runs, the report's section-3 measure), and it carries no measurement. The three
-  readings are equally robust: over the study's seeded repeats (10 seeds, 20 steps, torso
-  pushes N(0, 5 N) per axis every 0.1 s) at 0.15-0.40 m each has no fall and no landing
-  beyond 2 cm, and undisturbed they walk the same lengths at step times 1.0-1.4 s and DSP
-  shares 0.1-0.3. An earlier ``current`` read the measured CoM; once eq. (19)'s estimate
-  stopped jumping at lift-off and touch-down (``controller/walker.py``), that reading and the
-  MPC's state differ by wiggles at the phase changes only, and gave the same table.
+  against +8.1 deg/s and 0.2 % (predicted) and +9.4 deg/s and 0.1 % (nominal); the report's
+  section-3 measure on the unseeded 10-step runs), and it reads no measurement. The three
+  readings are equally robust: over the study's seeded repeats (``pelvic-walk simulate
+  --method mpc --step-length L --steps 20 --seed N --set pelvis.lateral_distance=MODE``,
+  seeds 0-9) at 0.15-0.40 m none falls or lands beyond 2 cm, and undisturbed (10 steps, step
+  times 1.0-1.4 s, DSP shares 0.1-0.3, 0.15-0.45 m) they fall in the same cells, all at
+  0.45 m. ``current`` once read the measured CoM estimate; since eq. (19)'s estimate no
+  longer jumps at lift-off and touch-down (``controller/walker.py``) that reading differs
+  from the MPC's state by wiggles at the phase changes only and gives the same repeats.
 - **Sign**: a positive yaw (about +z) moves the left hip (at +y) backward. The pelvis must turn
   each hip *toward its own foot* (the forward foot's hip moves forward, so the forward leg's
   hip-to-foot distance shrinks), hence ``theta_ref = -mean(atan(k_pel dx / dy))``. The literal
