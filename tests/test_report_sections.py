@@ -96,7 +96,9 @@ def synthetic() -> StudyResults:
     balance = BalanceSection(
         [0.3],
         {
-            case_key(m, 0.3): BalanceCase(m, 0.3, True, False, 0.0, 3.0, 0.4, 0.07, {"outer": 12})
+            case_key(m, 0.3): BalanceCase(
+                m, 0.3, True, False, 0.0, 3.0, 0.4, 0.07, {"outer": 12}, 171
+            )
             for m in METHODS
         },
     )
@@ -148,7 +150,7 @@ def test_sections_render_with_intact_tables():
     _tables_intact(md)
     assert "current (default)" in md and "9.5 %" in md  # a sine's share in a 20 % DSP
     assert "p = 0.01 *" in md  # significance over the runs
-    assert "0.0 / 3.0, 0.40; 7.0 % (outer)" in md  # balance margin, tilt, edge share
+    assert "0.0 / 3.0, 0.40; 12 of 171 (outer)" in md  # balance margin, tilt, edge share
     assert "J per two-step window" in md
     assert "1 / 1 / 2; 4.5" in md  # robustness: fell / off / runs; worst landing
 

@@ -49,6 +49,7 @@ class BalanceCase:
     tilt_max_deg: float | None  # largest tilt of a foot in contact
     edge_share: float | None = None  # walking ticks with the CoP on an edge (margin < 0.5 mm)
     edges: dict[str, int] = field(default_factory=dict)  # those ticks by edge (EDGES)
+    walking_ticks: int = 0
 
 
 @dataclass(frozen=True)
@@ -106,5 +107,6 @@ def balance(study: Study, results: Results) -> BalanceSection:
                 tilt_max_deg=o.get("sole_tilt_max_deg"),
                 edge_share=sum(edges.values()) / walking if walking else None,
                 edges=edges,
+                walking_ticks=walking,
             )
     return BalanceSection(lengths, cases)

@@ -257,7 +257,7 @@ CLAIMS: tuple[Claim, ...] = (
             paper=f"{_T1_GAPS[0]:.1f} -> {_T1_GAPS[-1]:.0f} J from {_T1_BOTH[0]:.2f} to "
             f"{_T1_BOTH[-1]:.2f} m",
             measure=measures.energy_std_gap,
-            ours="gaps {details} (Spearman's rho with the length {rho:+.2f}, p = {p:.2g})",
+            ours="gaps {details} (Spearman's rho with the length {rho:+.2f}, {p_text})",
             rule=Rule((is_("grows", True), is_("last_smaller", True)), (is_("grows", True),)),
             names={
                 "grows": "the gap's rank correlation with the length is positive, p < 0.05",

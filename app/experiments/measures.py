@@ -217,6 +217,7 @@ def energy_std_gap(study: Study, r: StudyResults) -> Measured:
     return dict(
         rho=rho,
         p=p,
+        p_text="p < 0.001" if p < 0.001 else f"p = {p:.2g}",
         grows=bool(rho > 0 and p < 0.05),
         last_smaller=order_stds(a_last, b_last) == -1,
         last=pairs[-1][0],
