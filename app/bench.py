@@ -1,4 +1,5 @@
-"""Performance figures: ``pelvic-walk bench [--json PATH] [--ticks N]`` (INTERFACES.md).
+"""Performance figures: ``pelvic-walk bench [--json PATH] [--ticks N]``
+(docs/INTERFACES.md, "bench JSON").
 
 Everything comes from one invocation, on one robot, headless:
 

@@ -21,7 +21,8 @@ Choices where the paper is vague:
   a single support (SSP, the swing foot in the air). In the DSP of step k the ZMP reference
   moves linearly from the previous support foot centre (for the first step: the midpoint of
   the feet) to the support foot of step k; in the SSP it stays at the support foot centre.
-- ``walk.dsp_split = "both_ends"`` (the authors' implementation, SPEC.md section 7) puts half
+- ``walk.dsp_split = "both_ends"`` (the authors' public implementation; docs/DESIGN.md,
+  "Double-support timing") puts half
   of that DSP at the start of the step and half at its end, after the touch-down: the ZMP moves
   from the midpoint of the feet to the support foot in the first half, stays in the SSP, and
   moves on to the midpoint between the support foot and the landed foot in the second. Between
@@ -435,7 +436,8 @@ def _finish(
     """
     feet = np.array(feet, dtype=float)
     dsp = walk.dsp_ratio * walk.step_time
-    # the DSP before the lift-off and after the touch-down of each step (SPEC.md section 7)
+    # the DSP before the lift-off and after the touch-down of each step (docs/DESIGN.md,
+    # "Double-support timing")
     dsp_end = 0.5 * dsp if walk.dsp_split == "both_ends" else 0.0
     dsp_start = dsp - dsp_end
     half_w = walk.step_width / 2.0

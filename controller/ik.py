@@ -5,7 +5,7 @@ right leg (6)] (eq. 6), the order of ``LOWER_JOINTS``. The QP is
 
     min  1/2 ||J_low q_dot - v_des||^2 + damping/2 ||q_dot||^2 (+ redundancy term)     (39)
     s.t. max((q_min - q)/dt, -v_max) <= q_dot <= min((q_max - q)/dt, v_max)
-         waist row: per method (SPEC section 3)
+         waist row: per method (docs/DESIGN.md, "The three methods")
 
 and the caller sets q_des = q + dt q_dot (eq. 40).
 
@@ -16,7 +16,7 @@ Paper symbols -> code names:
     q_low,cur -> ``q_low``; q_low,min/max -> ``q_min``/``q_max``; Delta t -> ``dt``;
     q_dot_low,min/max -> +-``params.joint_speed_limit``; theta_dot_{i+1} -> ``waist_rate``.
 
-The three methods (SPEC section 3):
+The three methods (docs/DESIGN.md, "The three methods"):
 - ``fixed``: waist row l = u = 0 (no pelvic rotation).
 - ``mpc``: waist row l = u = ``waist_rate`` (the pelvic MPC's theta_dot_{i+1}), **clipped into
   the waist's joint-limit / speed bounds** so the QP always stays feasible (the MPC already

@@ -1,6 +1,6 @@
 """One control tick chaining the paper's layers (Fig. 3), at 200 Hz.
 
-Order of a tick (SPEC.md section 2):
+Order of a tick (docs/DESIGN.md, "One control tick"):
  1. footstep plan (re-planned from the next step when walking parameters change),
  2. ZMP reference and 3. CoM MPC (eq. 10-18), predicted CoM (eq. 25-26),
  4. pelvis position (eq. 19), 5. foot trajectories (eq. 20-21),

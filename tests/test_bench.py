@@ -1,4 +1,5 @@
-"""`pelvic-walk bench`: it runs and writes every key of INTERFACES.md (no timing assertions)."""
+"""`pelvic-walk bench`: it runs and writes every key of docs/INTERFACES.md, "bench JSON" (no
+timing assertions)."""
 
 from __future__ import annotations
 

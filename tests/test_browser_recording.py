@@ -1,5 +1,5 @@
 """A recording of about 10 s opens in Chromium from the files alone and shows the robots
-moving (issue 12, "Record and share").
+moving ("Record and share" in the README).
 
 ``pelvic-walk simulate ... --record walk.zip`` (in this process; no server runs at any time,
 and its recorder's viser server is stopped before the browser starts), unzipped; Chromium

@@ -54,7 +54,8 @@ def test_mpc_pins_the_ik_waist_rate_to_the_pelvic_mpc():
 
 
 def test_mpc_turns_the_pelvis_toward_the_forward_foot():
-    """SPEC 1: the hip of the leading foot goes forward: the leading leg's reach shrinks."""
+    """The hip of the leading foot goes forward: the leading leg's reach shrinks
+    (docs/DESIGN.md, "Sign of the pelvic angle")."""
     session = Session(RunConfig(params=_params("mpc", 0.4, 2)))
     plan = session.walker.plan
     t_land = plan.step_start[1] + plan.step_duration[1]  # the second step (right foot) lands

@@ -1,4 +1,5 @@
-"""The live simulation of the web tool (STYLE.md: one owner of the loop, intent in, frames out).
+"""The live simulation of the web tool: one owner of the loop, intent in, frames out
+(docs/ARCHITECTURE.md, "Principles").
 
 - ``intent``: what users ask for (:class:`Intent`), replaced atomically by callbacks;
 - ``loop``: :class:`LiveLoop` ticks the robots, paces them, publishes frames (no display code);

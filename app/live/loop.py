@@ -1,6 +1,7 @@
 """The live loop: it reads intent, ticks the robots, paces to the wall clock and publishes.
 
-Pattern (STYLE.md, mujoco_playground / pink's gizmo example): one owner of the simulation.
+Pattern (docs/ARCHITECTURE.md, "Principles"; as in mujoco_playground and pink's gizmo
+example): one owner of the simulation.
 :class:`LiveLoop` holds one :class:`~app.sim.session.Session` per selected method (same
 parameters, the method differs) and knows nothing of displays or the web: it reads the
 latest :class:`~app.live.intent.Intent` from a callable and hands each

@@ -1,4 +1,4 @@
-"""Time series kept in memory-bounded arrays, and the run summary of SPEC.md section 5.
+"""Time series kept in memory-bounded arrays, and the run summary (docs/DESIGN.md, "Metrics").
 
 ``Series`` is a fixed-capacity ring buffer of named float columns: a headless run sizes it to
 the whole plan, a live session to a rolling window, so memory never grows with run time.

@@ -283,7 +283,8 @@ class Session:
         self._energy_and_falls(out, m.t, m.contacts.other_contact)
 
     def _energy_and_falls(self, out: TickOutput, t: float, other_contact: bool | None) -> None:
-        """Every tick: the energy at each step's start and the fall test (SPEC section 4);
+        """Every tick: the energy at each step's start and the fall test (docs/DESIGN.md, "What
+        counts as a fall");
         ``other_contact`` from the tick's measured contacts, or None to look it up."""
         if self.fell:
             return
@@ -330,7 +331,8 @@ class Session:
         return two_step_windows(np.array(starts).reshape(len(starts), n_joints))
 
     def summary(self) -> dict:
-        """The keys of ``simulate --json`` (INTERFACES.md) and extras: app.sim.summary."""
+        """The keys of ``simulate --json`` (docs/INTERFACES.md, "simulate JSON") and extras:
+        app.sim.summary."""
         from app.sim.summary import summarize
 
         return summarize(self)

@@ -1,6 +1,7 @@
-"""A run's summary: the keys of ``simulate --json`` (INTERFACES.md) plus extras.
+"""A run's summary: the keys of ``simulate --json`` (docs/INTERFACES.md, "simulate JSON")
+plus extras.
 
-Definitions (SPEC.md section 5):
+Definitions (docs/DESIGN.md, "Metrics"):
 - peaks (waist angle and rate, yaw momentum, kappa) over the walking phase, up to a fall;
 - energy per two-step window (eq. 44): :meth:`app.sim.session.Session.energy_windows`, from
   one sample of servo torque and joint speed per control period (200 Hz, as a robot logs
@@ -115,7 +116,7 @@ def summarize(session: Session) -> dict[str, Any]:
         "realtime_factor": sim_time / session.wall_time if session.wall_time > 0 else None,
         "tick_ms_median": float(np.median(tick)),
         "tick_ms_p99": float(np.percentile(tick, 99)),
-        # extras beyond INTERFACES.md (free to add):
+        # further keys (docs/INTERFACES.md, "simulate JSON", the further keys):
         "fall_reason": session.fall_reason,
         "servo_saturation_substeps": int(world.saturated_substeps),
         "speed_limited_ticks": int(session.speed_limited_ticks),

@@ -8,7 +8,7 @@ counted over the substeps.
 Energy (eq. 44, the positive part of servo torque x joint speed, summed over time) is kept two
 ways, per joint:
 - ``energy_ctrl_per_joint``: from one sample of torque and speed per control period (200 Hz),
-  as a robot logs them: the figure the study and the live plots report (SPEC.md section 5);
+  as a robot logs them: the figure the study and the live plots report (docs/DESIGN.md, "Energy");
 - ``energy_substep_per_joint``: from every MuJoCo substep (1 ms), which also counts the servo
   chatter inside a control period: reported beside it;
 - ``work_net``: the net work (torque x speed with its sign, every substep, all joints), the
@@ -42,7 +42,8 @@ from models.dyros_jet import (
 )
 
 JOINTS = LOWER_JOINTS + ARM_JOINTS
-MAX_TILT_RAD = np.deg2rad(30.0)  # SPEC 4: torso tilt beyond this is a fall
+# torso tilt beyond this is a fall (docs/DESIGN.md, "What counts as a fall")
+MAX_TILT_RAD = np.deg2rad(30.0)
 
 
 @dataclass(frozen=True)
@@ -291,7 +292,7 @@ class World:
         return convex_hull(np.array(pts))
 
     def fall_reason(self) -> str | None:
-        """Why the robot counts as fallen (SPEC 4), or None."""
+        """Why the robot counts as fallen (docs/DESIGN.md, "What counts as a fall"), or None."""
         if self.data.qpos[2] < 0.5 * NOMINAL_PELVIS_HEIGHT:
             return "pelvis below half its nominal height"
         if self.torso_tilt() > MAX_TILT_RAD:
