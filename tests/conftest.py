@@ -15,7 +15,10 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
+import time
+from collections.abc import Iterator
 
 import pytest
 
@@ -45,3 +48,71 @@ def _own_state_dir(tmp_path_factory):
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("XDG_STATE_HOME", str(tmp_path_factory.mktemp("xdg-state")))
         yield
+
+
+# -- the API around a live simulation (one per test module) ---------------------------------
+# A module tunes them with module-level dicts: LIVE_SIM (LiveSim's keyword arguments, e.g.
+# ``{"methods": ["mpc"], "speed": 4.0}``; the plans are short, N_STEPS steps) and APP_OPTIONS
+# (create_app's, e.g. ``{"runs": RunManager(max_wall_s=2.0)}``).
+N_STEPS = 4  # steps of a live plan in these tests: short, so plan ends and restarts are seen
+
+
+@pytest.fixture(scope="module")
+def live(request):
+    """A running :class:`~app.live.LiveSim` (two robots, fixed and mpc, by default) that has
+    published a frame; stopped at the end, and it must not have failed."""
+    from app.live import LiveSim
+    from controller.params import ControllerParams
+
+    kw = {"methods": ["fixed", "mpc"], **getattr(request.module, "LIVE_SIM", {})}
+    sim = LiveSim(ControllerParams().replace(walk={"n_steps": N_STEPS}), **kw)
+    sim.start()
+    assert sim.wait_frame(timeout=60) is not None, "the live simulation published nothing"
+    yield sim
+    sim.stop()
+    assert sim.error is None, sim.error
+
+
+@pytest.fixture(scope="module")
+def client(live, request):
+    """FastAPI's TestClient on the app around :func:`live` (with the module's APP_OPTIONS)."""
+    from fastapi.testclient import TestClient
+
+    from app.web.api import create_app
+
+    app = create_app(live, **getattr(request.module, "APP_OPTIONS", {}))
+    with TestClient(app) as c:
+        yield c
+    app.state.runs.shutdown()
+
+
+@contextlib.contextmanager
+def _served_in_thread(app) -> Iterator[str]:
+    """uvicorn serving ``app`` on a free loopback port in a thread; yields its base URL."""
+    import threading
+
+    import uvicorn
+
+    from app.local_server import free_port
+
+    port = free_port()
+    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
+    thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 60
+    while not server.started and thread.is_alive() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert server.started, "uvicorn did not start"
+    try:
+        yield f"http://127.0.0.1:{port}"
+    finally:
+        server.should_exit = True
+        thread.join(15)
+        app.state.runs.shutdown()
+
+
+@pytest.fixture(scope="module")
+def serve_app():
+    """``with serve_app(app) as base_url``: a real HTTP server for requests a TestClient cannot
+    make (raw paths, another process such as schemathesis)."""
+    return _served_in_thread

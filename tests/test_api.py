@@ -17,22 +17,7 @@ from controller.params import ControllerParams
 DT = ControllerParams().control_dt
 
 
-@pytest.fixture(scope="module")
-def live():
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 4}), methods=["fixed", "mpc"])
-    sim.start()
-    assert sim.wait_frame(timeout=30) is not None
-    yield sim
-    sim.stop()
-    assert sim.error is None
-
-
-@pytest.fixture(scope="module")
-def client(live):
-    app = create_app(live, viser_port=18765)
-    with TestClient(app) as c:
-        yield c
-    app.state.runs.shutdown()
+APP_OPTIONS = {"viser_port": 18765}  # the page names it (test_pages, test_health)
 
 
 @pytest.fixture(autouse=True)
@@ -592,34 +577,16 @@ def test_redaction_blanks_tokens_in_log_records():
 
 # -- path traversal, with requests that keep their ".." -------------------------------------
 @pytest.fixture(scope="module")
-def raw_server(live, tmp_path_factory):
+def raw_server(live, tmp_path_factory, serve_app):
     """uvicorn on a free localhost port in a thread, serving a report dir with a secret beside."""
-    import socket
-    import threading
-
-    import uvicorn
-
     base = tmp_path_factory.mktemp("raw")
     (base / "secret.txt").write_text("SECRET-CONTENT")
     report = base / "report"
     (report / "figures").mkdir(parents=True)
     (report / "report.md").write_text("# r\n")
     (report / "figures" / "a.png").write_bytes(b"PNGDATA")
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    app = create_app(live, report_dir=report)
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
-    thread = threading.Thread(target=server.run, daemon=True)
-    thread.start()
-    deadline = time.monotonic() + 30
-    while not server.started and thread.is_alive() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert server.started, "uvicorn did not start"
-    yield port, report
-    server.should_exit = True
-    thread.join(10)
-    app.state.runs.shutdown()
+    with serve_app(create_app(live, report_dir=report)) as url:
+        yield int(url.rsplit(":", 1)[1]), report
 
 
 def _raw_get(port: int, target: str) -> tuple[int, bytes]:

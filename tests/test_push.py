@@ -8,15 +8,12 @@ from __future__ import annotations
 
 import mujoco
 import pytest
-from fastapi.testclient import TestClient
 
 import app.pushes as pushes
 from app.cli import main as cli_main
-from app.live import LiveSim
 from app.live.intent import PUSH_FORCE_MAX
 from app.sim.world import World
-from app.web.api import create_app
-from controller.params import METHODS, ControllerParams
+from controller.params import METHODS
 
 SHORT = {"n_steps": 4, "step": 2}  # push mid-SSP of the third step, two more to recover
 MASS = mujoco.mj_getTotalmass(World().model)  # [kg]
@@ -79,16 +76,9 @@ def test_bad_arguments():
 
 # -- the API: refusals with a message, and the live loop goes on ----------------------------
 @pytest.fixture(scope="module")
-def client():
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 4}), methods=["fixed", "mpc"])
-    sim.start()
-    assert sim.wait_frame(timeout=30) is not None
-    app = create_app(sim, viser_port=18766)
-    with TestClient(app) as c:
-        yield c, sim
-    app.state.runs.shutdown()
-    sim.stop()
-    assert sim.error is None
+def api(client, live):
+    """The shared TestClient (tests/conftest.py) and its live simulation."""
+    return client, live
 
 
 @pytest.mark.parametrize(
@@ -100,8 +90,8 @@ def client():
         ({"method": "mpc", "force": [0, 60], "duration": -0.1}, "duration"),
     ],
 )
-def test_bad_pushes_are_refused_and_the_loop_goes_on(client, body, words):
-    c, sim = client
+def test_bad_pushes_are_refused_and_the_loop_goes_on(api, body, words):
+    c, sim = api
     before = sim.frame()
     r = c.post("/api/sim/push", json=body)
     assert r.status_code == 422, r.text
@@ -112,8 +102,8 @@ def test_bad_pushes_are_refused_and_the_loop_goes_on(client, body, words):
     assert sim.running and sim.error is None
 
 
-def test_a_good_push_is_applied(client):
-    c, sim = client
+def test_a_good_push_is_applied(api):
+    c, sim = api
     r = c.post("/api/sim/push", json={"method": "mpc", "force": [0, 60], "duration": 0.1})
     assert r.status_code == 200 and r.json()["applied"] is True
     assert sim.frame().pushes_done >= 1

@@ -12,37 +12,25 @@ import zipfile
 from types import SimpleNamespace
 
 import pytest
-from fastapi.testclient import TestClient
 
 from app.cli import main
 from app.live import LiveSim
 from app.live.history import ROW_COLUMNS
 from app.web import recording
-from app.web.api import create_app
 from app.web.recording import check_seconds, decimate, kept_seconds
-from controller.params import ControllerParams
 
 FILES = {"index.html", "scene.html", "timeseries.csv", "plots.png", "README.txt"}
 
 
-@pytest.fixture(scope="module")
-def live():
-    """One robot, short plans, at 4x real time: a few seconds are kept quickly."""
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 4}), methods=["mpc"], speed=4.0)
-    sim.start()
-    assert sim.wait_frame(timeout=30) is not None
-    yield sim
-    sim.stop()
+LIVE_SIM = {"methods": ["mpc"], "speed": 4.0}  # one robot at 4x: seconds are kept quickly
+APP_OPTIONS = {"viser_port": 18767}
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _recorders_stopped():
+    """The recorders' threads end with the module."""
+    yield
     recording.shutdown()
-    assert sim.error is None
-
-
-@pytest.fixture(scope="module")
-def client(live):
-    app = create_app(live, viser_port=18767)
-    with TestClient(app) as c:
-        yield c
-    app.state.runs.shutdown()
 
 
 def _keep_at_least(live: LiveSim, seconds: float) -> None:

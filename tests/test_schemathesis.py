@@ -11,51 +11,24 @@ so the fuzzing cannot exhaust the machine.
 
 from __future__ import annotations
 
-import socket
 import subprocess
 import sys
-import threading
-import time
 from pathlib import Path
 
 import httpx
 import pytest
-import uvicorn
 
-from app.live import LiveSim
 from app.web.api import RunManager, create_app
-from controller.params import ControllerParams
 
 MAX_TIME_S = 60
 RUN_WALL_S = 2.0
 
 
 @pytest.fixture(scope="module")
-def live():
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 4}), methods=["fixed", "mpc"])
-    sim.start()
-    assert sim.wait_frame(timeout=30) is not None
-    yield sim
-    sim.stop()
-
-
-@pytest.fixture(scope="module")
-def base_url(live):
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
+def base_url(live, serve_app):
     app = create_app(live, viser_port=18766, runs=RunManager(max_wall_s=RUN_WALL_S))
-    server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))
-    thread = threading.Thread(target=server.run, name="uvicorn", daemon=True)
-    thread.start()
-    deadline = time.monotonic() + 30
-    while not server.started and thread.is_alive() and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert server.started, "uvicorn did not start"
-    yield f"http://127.0.0.1:{port}"
-    server.should_exit = True
-    thread.join(15)
-    app.state.runs.shutdown()
+    with serve_app(app) as url:
+        yield url
 
 
 def test_no_request_gets_a_server_error(base_url, live, tmp_path):
