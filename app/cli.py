@@ -14,7 +14,7 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
-from app.params_cli import add_param_options, params_from_args, positive_int
+from app.params_cli import MethodList, add_param_options, params_from_args, positive_int
 from app.sweep.cli import add_sweep_arguments
 from app.sweep.spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from controller.params import METHODS
@@ -74,9 +74,10 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument(
         "--methods",
         nargs="+",
-        choices=METHODS,
+        action=MethodList,
         default=None,
-        help="the robots every session starts with (default: fixed redundancy mpc)",
+        help="the robots every session starts with, with commas or spaces (default: fixed "
+        "redundancy mpc)",
     )
     p.add_argument(
         "--workers",
@@ -228,7 +229,9 @@ def build_parser() -> argparse.ArgumentParser:
         description="Push the torso for --duration s at mid-single-support of the third "
         "step; a run recovers when the robot has not fallen by the end of the plan.",
     )
-    p.add_argument("--methods", nargs="+", choices=METHODS, default=list(METHODS))
+    p.add_argument(
+        "--methods", nargs="+", action=MethodList, default=list(METHODS), help="commas or spaces"
+    )
     p.add_argument("--step-length", type=_finite, default=0.3, help="[m] (default 0.3)")
     p.add_argument("--direction", choices=("left", "right", "forward", "back"), default="left")
     p.add_argument("--duration", type=_finite, default=0.1, help="[s] (default 0.1)")

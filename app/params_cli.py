@@ -68,6 +68,25 @@ def split_list(items: Iterable[str]) -> list[str]:
     return [part.strip() for item in items for part in item.split(",") if part.strip()]
 
 
+class MethodList(argparse.Action):
+    """``--methods``: walking methods given with commas or spaces alike, each checked (an
+    unknown one is the parser's one-line error, exit 2); duplicates dropped, order kept."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        from controller.params import METHODS
+
+        methods = list(dict.fromkeys(split_list(values)))
+        unknown = [m for m in methods if m not in METHODS]
+        if unknown or not methods:
+            parser.error(
+                f"argument {option_string}: unknown method {unknown[0]!r} (choose from "
+                f"{', '.join(METHODS)})"
+                if unknown
+                else f"argument {option_string}: name at least one method"
+            )
+        setattr(namespace, self.dest, methods)
+
+
 def _meta_of(dotted: str) -> tuple[str, str, dict[str, Any]]:
     group, _, name = dotted.partition(".")
     for g, n, meta in fields():

@@ -28,6 +28,9 @@ BAD = [
     ["bench", "--json", "/nonexistent/b.json"],
     ["simulate", "--method", "mpc", "--step-length", "0.2", "--disturbance", "5"],  # no seed
     ["simulate", "--method", "mpc", "--step-length", "0.2", "--seed", "1", "--disturbance", "-1"],
+    ["serve", "--methods", "fixed,sideways"],
+    ["push-study", "--methods", ","],
+    ["sweep", "--set", "walk.dsp_ratio=0.1,0.2", "--methods", "fixed,sideways"],
 ]
 
 
@@ -137,3 +140,33 @@ def test_a_seeded_api_run_is_the_clis_run(tmp_path):
     api = rec["summary"]
     assert api["energy_two_step_windows"] == cli["energy_two_step_windows"]
     assert api["landing_errors"] == cli["landing_errors"]
+
+
+@pytest.mark.parametrize(
+    ("argv", "want"),
+    [
+        (["serve", "--methods", "fixed,mpc"], ["fixed", "mpc"]),
+        (["serve", "--methods", "fixed", "mpc"], ["fixed", "mpc"]),
+        (["serve", "--methods", "fixed,", "redundancy", "mpc"], ["fixed", "redundancy", "mpc"]),
+        (["push-study", "--methods", "mpc,fixed"], ["mpc", "fixed"]),
+        (["push-study", "--methods", "mpc", "mpc"], ["mpc"]),
+    ],
+)
+def test_method_lists_take_commas_or_spaces(argv, want):
+    from app.cli import build_parser
+
+    assert build_parser().parse_args(argv).methods == want
+
+
+def test_sweep_lists_take_commas_or_spaces():
+    from app.sweep.cli import build_parser, grid_from_args
+
+    grids = [
+        grid_from_args(build_parser().parse_args(argv))
+        for argv in (
+            ["--set", "walk.dsp_ratio=0.1,0.2", "--methods", "fixed,mpc", "--measure", "summary"],
+            ["--set", "walk.dsp_ratio=0.1", "0.2", "--methods", "fixed", "mpc"],
+        )
+    ]
+    assert grids[0].methods == grids[1].methods == ("fixed", "mpc")
+    assert grids[0].axes == grids[1].axes and len(grids[1].cells()) == 2
