@@ -45,11 +45,13 @@ test: $(TEST_STAMP) chromium
 check: $(TEST_STAMP)
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not browser and not slow"
 
-# Style and types: ruff's rules and formatting everywhere, mypy on app and controller.
+# Style, types and structure: ruff's rules and formatting everywhere, mypy on app and
+# controller, the import contracts between the layers (pyproject.toml [tool.importlinter]).
 lint: $(TEST_STAMP)
 	$(BIN)/ruff check app controller models tests
 	$(BIN)/ruff format --check app controller models tests
 	$(BIN)/mypy
+	$(BIN)/lint-imports
 
 clean:
 	rm -rf $(VENV) .pytest_cache

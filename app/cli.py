@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
 from app.params_cli import MethodList, add_param_options, params_from_args, positive_int
+from app.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from app.sweep.cli import add_sweep_arguments
-from app.sweep.spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from controller.params import METHODS
 
 if TYPE_CHECKING:
@@ -257,7 +257,7 @@ def simulate_config(args: argparse.Namespace) -> RunConfig:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from app.runs import run
+    from app.runs import run, summarize
 
     try:
         cfg = simulate_config(args)
@@ -271,7 +271,7 @@ def _simulate(args: argparse.Namespace) -> int:
 
         recorder = HeadlessRecorder(params.method)
     session = run(cfg, on_tick=recorder.capture if recorder else None)
-    summary = session.summary()
+    summary = summarize(session)
     ok = "success" if summary["success"] else ("FELL" if summary["fell"] else "incomplete")
     le = summary["landing_error_max"]
     print(

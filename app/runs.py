@@ -11,12 +11,12 @@ import dataclasses
 import time
 from collections.abc import Callable
 
+from app.run_spec import OWN_FIELDS, RunSpec
 from app.sim.session import RunConfig, Session
-from app.sim.summary import SUMMARY_KEYS
-from app.sweep.spec import OWN_FIELDS, RunSpec
+from app.sim.summary import SUMMARY_KEYS, summarize
 from controller.params import GROUPS, ControllerParams
 
-__all__ = ["SUMMARY_KEYS", "RunConfig", "Session", "run", "spec_of"]
+__all__ = ["SUMMARY_KEYS", "RunConfig", "Session", "run", "spec_of", "summarize"]
 
 
 def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:

@@ -95,7 +95,7 @@ def _simulate(tmp_path, *extra: str, length: str = "0.3", steps: str = "3") -> d
 def test_simulate_seed_runs_the_studys_repeat(tmp_path):
     """`simulate --seed N` is the study's repeat N of the same cell: every summary key equal."""
     from app.experiments.worker import execute
-    from app.sweep.spec import RunSpec
+    from app.run_spec import RunSpec
 
     cli = _simulate(tmp_path, "--seed", "4", "--set", "pelvis.k_pel=0.3")
     spec = RunSpec("mpc", 0.3, 3, True, 4, (("pelvis.k_pel", 0.3),))

@@ -4,7 +4,7 @@ different energy means, and one seed gives the same run twice."""
 from __future__ import annotations
 
 from app.experiments.definitions import DISTURBANCE, DISTURBANCE_PERIOD, RunSpec
-from app.runs import RunConfig, Session, run
+from app.runs import RunConfig, Session, run, summarize
 from controller.params import ControllerParams
 
 PARAMS = ControllerParams().replace(method="mpc", walk={"step_length": 0.2, "n_steps": 3})
@@ -21,7 +21,7 @@ def _cfg(seed: int | None) -> RunConfig:
 
 
 def _energy(seed: int) -> list[float]:
-    s = run(_cfg(seed)).summary()
+    s = summarize(run(_cfg(seed)))
     assert s["success"] and s["energy_two_step_windows"]
     return s["energy_two_step_windows"]
 

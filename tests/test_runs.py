@@ -6,7 +6,7 @@ import math
 import threading
 
 from app.live import LiveSim
-from app.runs import RunConfig, run
+from app.runs import RunConfig, run, summarize
 from controller.params import ControllerParams
 
 TIMING_KEYS = {"wall_time", "realtime_factor", "tick_ms_median", "tick_ms_p99"}
@@ -32,7 +32,7 @@ def _same(a, b, path="summary") -> None:
 def test_a_headless_run_beside_a_live_session_gives_the_same_summary():
     params = ControllerParams().replace(method="mpc", walk={"step_length": 0.3, "n_steps": 4})
     cfg = RunConfig(params=params, seed=1, perturbation=0.01)
-    alone = run(cfg).summary()
+    alone = summarize(run(cfg))
 
     # Three live robots ticking as fast as they can in another thread (no pacing sleeps).
     live = LiveSim(
@@ -44,7 +44,7 @@ def test_a_headless_run_beside_a_live_session_gives_the_same_summary():
     try:
         first = live.wait_frame(timeout=30)
         assert first is not None
-        beside = run(cfg).summary()
+        beside = summarize(run(cfg))
         last = live.wait_frame(first.seq, timeout=30)
         assert last is not None and last.clock > first.clock + 1.0  # the live robots walked
     finally:
@@ -58,11 +58,11 @@ def test_runs_in_threads_at_once_match_a_run_alone():
         method="redundancy", walk={"step_length": 0.25, "n_steps": 3}
     )
     cfg = RunConfig(params=params)
-    alone = run(cfg).summary()
+    alone = summarize(run(cfg))
     out: list[dict] = [{}, {}]
 
     def work(i: int) -> None:
-        out[i] = run(cfg).summary()
+        out[i] = summarize(run(cfg))
 
     threads = [threading.Thread(target=work, args=(i,)) for i in range(2)]
     for th in threads:

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.runs import SUMMARY_KEYS, RunConfig, Session, run
+from app.runs import SUMMARY_KEYS, RunConfig, Session, run, summarize
 from controller.params import ControllerParams
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -23,7 +23,7 @@ def _params(method: str, length: float = 0.2, steps: int = 3, arms: bool = True)
 @pytest.mark.parametrize("method", ["fixed", "redundancy", "mpc"])
 def test_three_step_closed_loop_walks(method):
     session = run(RunConfig(params=_params(method)))
-    s = session.summary()
+    s = summarize(session)
     assert set(SUMMARY_KEYS) <= set(s)
     assert s["success"] and not s["fell"], s
     assert s["steps_completed"] == 3
@@ -152,7 +152,7 @@ def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
     while not session.done:
         out = session.tick()
         assert np.all(np.isfinite(out.q_target))
-    s = session.summary()
+    s = summarize(session)
     name = {"ik_solver": "ik", "arm_solver": "arm_swing"}.get(layer, layer)
     assert s["solver_failures_by_layer"][name] == 10
     assert s["solver_failures"] == 10
@@ -167,7 +167,7 @@ def test_energy_windows_skip_the_start_and_landings_follow_a_replan():
     session.walker.replace_params(walk=dict(step_time=0.9))
     while not session.done:
         session.tick()
-    s = session.summary()
+    s = summarize(session)
     assert s["success"]
     assert max(s["landing_errors"]) < 0.02  # measured after each (re-timed) touch-down
     # steps 1..6 (6 = the closing step's start): windows (1->3), (3->5)
@@ -178,7 +178,7 @@ def test_energy_windows_skip_the_start_and_landings_follow_a_replan():
 
 def test_peaks_stop_at_a_fall():
     session = run(RunConfig(params=_params("fixed", 0.5, 6)))
-    s = session.summary()
+    s = summarize(session)
     assert s["fell"]
     t = session.series.column("t")
     ym = np.abs(session.series.column("yaw_momentum"))

@@ -1,6 +1,6 @@
 """The study, as data: which runs each section needs.
 
-A run is a :class:`~app.sweep.spec.RunSpec`: method, step length, steps, arm swing, seed, and
+A run is a :class:`~app.run_spec.RunSpec`: method, step length, steps, arm swing, seed, and
 any other parameter of ``controller/params.py`` as ``("group.name", value)`` overrides.
 Sections ask for runs with the *extracts* they need from each (a summary always; ``"step"``:
 one mid-walk step at full rate; ``"walk"``: the walking phase down-sampled; ``"zmp"``: ZMP and
@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from app.experiments import paper
-from app.sweep.spec import (
+from app.run_spec import (
     DISTURBANCE,
     DISTURBANCE_PERIOD,
     SEED_PERTURBATION,

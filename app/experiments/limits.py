@@ -16,8 +16,8 @@ from app.experiments import paper
 from app.experiments.definitions import Study, sweep_bracket
 from app.experiments.paper import KinematicLimits
 from app.experiments.runs import Results, RunSummary, failure_reasons, summary_of
+from app.run_spec import length
 from app.sweep.measure import walks
-from app.sweep.spec import length
 
 
 @dataclass(frozen=True)

@@ -26,9 +26,9 @@ from app.experiments.summary import summary_lines
 from app.experiments.verdicts import FAILS, HOLDS, NOT_MEASURED, PARTLY
 from app.experiments.waist import ANTICIPATION_MIN
 from app.methods import METHOD_INFO
+from app.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
 from app.sweep.measure import threshold_of
-from app.sweep.spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from controller.params import LATERAL_MODES, ControllerParams
 
 _P = ControllerParams()

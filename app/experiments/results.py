@@ -24,7 +24,7 @@ from app.experiments.robustness import RobustnessSection
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.waist import LateralSection, WaistSection
 from app.experiments.yaw import YawSection
-from app.sweep.spec import RunSpec
+from app.run_spec import RunSpec
 
 # keys whose values measure time or the machine, not the robot: they differ between two runs
 # of the same study (on any backend)

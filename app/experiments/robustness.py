@@ -2,7 +2,7 @@
 study's small disturbance, and the largest sideways push it survives.
 
 - *Repeats*: Table 1's seeded runs (each pushed through the whole run by a horizontal force
-  on the torso, N(0, 5 N) per axis renewed every 0.1 s; ``app.sweep.spec``). Per method and
+  on the torso, N(0, 5 N) per axis renewed every 0.1 s; ``app.run_spec``). Per method and
   length: the runs that fell, the runs that did not fall but landed a foot more than 2 cm off
   its planned foothold (``LANDING_ERROR_CLEAN``), the worst landing, and the seeds of each
   (``pelvic-walk simulate --seed N`` reruns repeat N).

@@ -2,7 +2,7 @@
 
 The runs go to one backend of ``app.sweep.engine`` (the local process pool by default, or Ray
 with ``--ray [ADDRESS]``), as jobs of plain data: :func:`worker.execute` on a
-:class:`~app.sweep.spec.RunSpec` for the study's runs, ``app.sweep.measure.run_one`` for the
+:class:`~app.run_spec.RunSpec` for the study's runs, ``app.sweep.measure.run_one`` for the
 sensitivity section's limit searches, :func:`robustness.push_job` for the push survival.
 
 Two phases, so the adaptive parts never wait at the end: first the push bisections and every
@@ -30,8 +30,8 @@ from app.experiments.results import Meta, StudyResults, to_json
 from app.experiments.robustness import PushCell, push_cell, push_job
 from app.experiments.runs import Results, case_key
 from app.experiments.worker import execute
+from app.run_spec import RunSpec
 from app.sweep.engine import Backend, OneJob, Task, make_backend, run_tasks
-from app.sweep.spec import RunSpec
 
 PROG = "pelvic-walk experiments"
 

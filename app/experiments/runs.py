@@ -16,8 +16,8 @@ from typing import Any
 
 import numpy as np
 
+from app.run_spec import RunSpec
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
-from app.sweep.spec import RunSpec
 
 Samples = list[float | None]  # a series as JSON-safe floats (None = NaN / inf)
 
@@ -84,7 +84,7 @@ class RunSummary:
 
     @classmethod
     def from_run(cls, summary: dict[str, Any], **extra: Any) -> RunSummary:
-        """From ``Session.summary()`` (every key kept) and the worker's ``extra`` keys."""
+        """From ``app.sim.summary.summarize`` (every key kept) and the worker's ``extra`` keys."""
         names = {f.name for f in dataclasses.fields(cls)} - {"other"}
         merged = {**summary, **extra}
         return cls(

@@ -20,10 +20,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from app.experiments.definitions import Sensitivity, Study
+from app.run_spec import Override, length
 from app.sim.metrics import KAPPA_SINGULAR
 from app.sweep.grid import Cell
 from app.sweep.measure import LimitSearch, LimitTask, criteria, outcome_of
-from app.sweep.spec import Override, length
 from controller.params import ControllerParams
 
 MPC_ONLY_GROUPS = ("pelvis",)  # parameter groups only the MPC reads

@@ -27,7 +27,7 @@ from app.experiments.runs import (
     ZmpExtract,
     samples,
 )
-from app.sweep.spec import RunSpec
+from app.run_spec import RunSpec
 from controller.kinematics import KAPPA_CAP
 from models.dyros_jet import FOOT_SIZE
 
@@ -181,7 +181,7 @@ def _zmp_extract(
 
 def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResult:
     """Run one spec headless; return its summary and the requested extracts (small)."""
-    from app.runs import run
+    from app.runs import run, summarize
 
     start = time.perf_counter()
     params = spec.params()
@@ -192,7 +192,7 @@ def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResul
         return RunResult(
             spec, None, error=f"{type(exc).__name__}: {exc}", wall_s=time.perf_counter() - start
         )
-    summary = session.summary()
+    summary = summarize(session)
     plan = session.walker.plan
     series = session.series
     t = series.column("t")

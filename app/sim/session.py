@@ -329,10 +329,3 @@ class Session:
         ]
         n_joints = len(self.world.energy_ctrl_per_joint)
         return two_step_windows(np.array(starts).reshape(len(starts), n_joints))
-
-    def summary(self) -> dict:
-        """The keys of ``simulate --json`` (docs/INTERFACES.md, "simulate JSON") and extras:
-        app.sim.summary."""
-        from app.sim.summary import summarize
-
-        return summarize(self)

@@ -2,8 +2,8 @@
 
 Where each thing is:
 
-- ``spec``: one run as plain data (:class:`~app.sweep.spec.RunSpec`), what the sweep and the
-  study (``app.experiments``) run.
+- what one run is: :class:`~app.run_spec.RunSpec` (``app/run_spec.py``), plain data that the
+  sweep, the study (``app.experiments``) and ``simulate --seed`` share.
 - ``engine``: the run engine both use: jobs of plain data on a backend (local ``spawn``
   process pool, Ray, in-process), one job in flight per task, with a progress bar.
 - ``grid``: the grid from ``--set GROUP.NAME=V1,V2,...`` options or a YAML / JSON file, any

@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from app.params_cli import parse_assignment, split_list
-from app.sweep.spec import RunSpec
+from app.run_spec import RunSpec
 from controller.params import METHODS, ControllerParams
 
 MEASURES = ("limit", "summary")

@@ -1,6 +1,6 @@
 """What one cell of a sweep measures, for one method: a *task* that asks for runs one by one.
 
-A run is :func:`run_one` (a :class:`~app.sweep.spec.RunSpec` in, a flat dict of plain values
+A run is :func:`run_one` (a :class:`~app.run_spec.RunSpec` in, a flat dict of plain values
 out, so it crosses process and Ray boundaries cheaply). A task gives its next job with
 :meth:`next_job` (``(run, (spec,))`` for :func:`app.sweep.engine.run_tasks`), is told each
 outcome with :meth:`record`, and gives its table row with :meth:`row`. Runs are deterministic
@@ -44,10 +44,10 @@ from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from typing import Any
 
+from app.run_spec import RunSpec, length
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
 from app.sim.summary import SUMMARY_KEYS
 from app.sweep.grid import Cell
-from app.sweep.spec import RunSpec, length
 
 SEARCH_MIN = 0.10  # [m] shortest step length the limit search tries
 SEARCH_MAX = 0.60  # [m] longest (the step_length parameter's maximum)
@@ -150,11 +150,11 @@ def run_one(spec: RunSpec) -> Outcome:
     keys, and ``wall_s`` (this run's wall time). A run that raises returns ``{"error": ...}``
     (a crash is an outcome of the parameters, never hides the other cells).
     """
-    from app.runs import run
+    from app.runs import run, summarize
 
     start = time.perf_counter()
     try:
-        summary = run(spec.config()).summary()
+        summary = summarize(run(spec.config()))
     except Exception as exc:
         return {"error": f"{type(exc).__name__}: {exc}", "wall_s": time.perf_counter() - start}
     out: Outcome = {k: _plain(summary[k]) for k in SUMMARY_KEYS}

@@ -30,7 +30,7 @@ from controller.params import GROUPS
 
 if TYPE_CHECKING:
     from app.live.frames import RobotFrame
-    from app.web.panel import ControlPanel
+    from app.web.host import PanelHost
 
 NUMBERS_HZ = 2.0  # live-number refreshes per second while running
 STATUS_COLOURS = {
@@ -93,7 +93,7 @@ class _Tally:
 class LearnTab:
     """The Learn tab's controls (built inside the tab by :class:`~app.web.panel.ControlPanel`)."""
 
-    def __init__(self, gui: Any, panel: ControlPanel):
+    def __init__(self, gui: Any, panel: PanelHost):
         self.gui = gui
         self.panel = panel
         self.lesson: Lesson | None = None
@@ -144,7 +144,7 @@ class LearnTab:
     def start(self, index: int, client: Any = None) -> None:
         """Set up lesson ``index``: parameters from their defaults plus the lesson's, its
         robots, a restart (so the numbers count from the same instant), its camera view."""
-        if self.panel._guarded():
+        if self.panel.guarded():
             return
         lesson = LESSONS[index]
         session = self.panel.session

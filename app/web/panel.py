@@ -42,7 +42,7 @@ from app.web.scene import LAYERS, fall_note
 from controller.params import GROUP_TITLES, GROUPS, METHODS, ControllerParams, spec
 
 if TYPE_CHECKING:
-    from app.web.view import View
+    from app.web.host import ViewHost
 
 STATUS_HZ = 2.0  # status text refreshes per second while running
 MESSAGE_S = 10.0  # [s] a one-off message (a refusal, a push done) stays in the status area
@@ -79,7 +79,7 @@ def _hint(meta: dict[str, Any]) -> str:
 class ControlPanel:
     """All the GUI of one view; writes intent into ``view.session``."""
 
-    def __init__(self, gui: Any, view: View):
+    def __init__(self, gui: Any, view: ViewHost):
         self.gui = gui
         self.view = view
         self._local = threading.local()  # .reflecting: True inside reflect() on that thread
@@ -123,7 +123,7 @@ class ControlPanel:
         return self.view.session
 
     # -- building ------------------------------------------------------------------------
-    def _guarded(self) -> bool:
+    def guarded(self) -> bool:
         """True inside :meth:`reflect`, or on a read-only panel (the change is refused, said
         once in the status area): a callback that sees True does nothing."""
         if getattr(self._local, "reflecting", False):
@@ -267,7 +267,7 @@ class ControlPanel:
         self._reflected_version = -1  # put the controls back at the values in force
 
     def _param_changed(self, group: str, name: str) -> None:
-        if self._guarded():
+        if self.guarded():
             return
         handle, log = self.controls[(group, name)]
         value = 10.0**handle.value if log else handle.value
@@ -281,7 +281,7 @@ class ControlPanel:
             self._say(f"**Not applied:** {html.escape(str(exc))}")
 
     def _methods_changed(self) -> None:
-        if self._guarded():
+        if self.guarded():
             return
         chosen = [m for m, box in self.method_boxes.items() if box.value]
         if not chosen:
@@ -290,17 +290,17 @@ class ControlPanel:
         self.session.set_methods(chosen)
 
     def _speed_changed(self) -> None:
-        if self._guarded() or self.speed.value == self.session.intent.speed:
+        if self.guarded() or self.speed.value == self.session.intent.speed:
             return
         self.session.set_speed(self.speed.value)
 
     def _reset(self) -> None:
-        if self._guarded():
+        if self.guarded():
             return
         self.session.reset()
 
     def _toggle_pause(self) -> None:
-        if self._guarded():
+        if self.guarded():
             return
         if self.session.intent.paused:
             self.session.resume()
@@ -308,13 +308,13 @@ class ControlPanel:
             self.session.pause()
 
     def _step(self, which: str) -> None:
-        if self._guarded():
+        if self.guarded():
             return
         until = {"5 ms tick": "tick", "to lift-off": "liftoff", "to landing": "landing"}[which]
         self.session.step(until)
 
     def _seek(self) -> None:
-        if self._guarded() or not self.session.intent.paused:
+        if self.guarded() or not self.session.intent.paused:
             return
         try:
             self.session.seek(float(self.timeline.value))
@@ -322,7 +322,7 @@ class ControlPanel:
             self._say(html.escape(str(exc)))
 
     def _push(self) -> None:
-        if self._guarded():
+        if self.guarded():
             return
         dx, dy = PUSH_DIRECTIONS[self.push_dir.value]
         f = float(self.push_force.value)
@@ -343,7 +343,7 @@ class ControlPanel:
     def apply_preset(self, name: str) -> None:
         """Apply one of :data:`PRESETS`: parameters (and methods); restart the robots together
         so side-by-side robots compare the same instants."""
-        if self._guarded():
+        if self.guarded():
             return
         preset = PRESETS[name]
         groups = {k: v for k, v in preset.items() if k in GROUPS}

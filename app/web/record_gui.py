@@ -20,7 +20,7 @@ from app.live.session import KEEP_S
 from app.web import recording
 
 if TYPE_CHECKING:
-    from app.web.panel import ControlPanel
+    from app.web.host import PanelHost
 
 MIN_S = 1.0  # [s] the shortest recording the slider offers
 DEFAULT_S = 10.0
@@ -30,7 +30,7 @@ BUTTON = "Record and download (.zip)"
 class RecordFolder:
     """A length slider, a button and a line that reports the last recording."""
 
-    def __init__(self, gui: Any, panel: ControlPanel):
+    def __init__(self, gui: Any, panel: PanelHost):
         self.panel = panel
         with gui.add_folder("Record", expand_by_default=False):
             gui.add_markdown(

@@ -12,7 +12,7 @@ from app.methods import METHOD_INFO
 from app.web.overlays import legend_html
 
 if TYPE_CHECKING:
-    from app.web.recording import Recording
+    from app.web.record_data import Recording
 
 README = """pelvic-walk recording
 =====================

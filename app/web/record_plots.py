@@ -18,7 +18,7 @@ from app.web.overlays import DANGER
 from app.web.plots import LOG_PLOTS, PLOTS
 
 if TYPE_CHECKING:
-    from app.web.recording import Recording
+    from app.web.record_data import Recording
 
 DSP_GREY = (0.47, 0.47, 0.47, 0.18)  # as the live plots' DSP_FILL
 

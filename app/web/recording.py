@@ -1,10 +1,10 @@
 """Recordings that play back without the server: the 3-D scene, the plots and the numbers.
 
-A :class:`Recording` is a list of published :class:`~app.live.LiveFrame` objects and the plot
-rows of the same window (``app.live.history.ROW_COLUMNS``). It is made from what a live
-session already keeps in the web process (:func:`from_session`: its FrameStore and plot
-history; the simulation is never paused or stepped for it) or captured during a headless run
-(:class:`HeadlessRecorder`, ``pelvic-walk simulate ... --record PATH``).
+A :class:`~app.web.record_data.Recording` is a list of published :class:`~app.live.LiveFrame`
+objects and the plot rows of the same window (``app.live.history.ROW_COLUMNS``). It is made
+from what a live session already keeps in the web process (:func:`from_session`: its
+FrameStore and plot history; the simulation is never paused or stepped for it) or captured
+during a headless run (:class:`HeadlessRecorder`, ``pelvic-walk simulate ... --record PATH``).
 
 It is written as (:func:`package`):
 
@@ -31,10 +31,8 @@ import html
 import io
 import math
 import threading
-import time
 import zipfile
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -42,10 +40,9 @@ import numpy as np
 from app.live.frames import LiveFrame, robot_frame
 from app.live.history import HISTORY_DECIMATION, ROW_COLUMNS
 from app.live.session import KEEP_S, SessionView
+from app.web.record_data import RECORD_HZ, Recording
 from app.web.record_page import README, index_html, title
-from controller.params import ControllerParams
 
-RECORD_HZ = 20.0  # scene frames per second of simulated time (the display rate)
 FORMATS = ("zip", "html", "csv", "png")  # what GET /api/recording can return
 MEDIA_TYPES = {"zip": "application/zip", "html": "text/html", "csv": "text/csv", "png": "image/png"}
 BUSY_WAIT_S = 20.0  # [s] a recording waits this long for the one being made, then gives up
@@ -54,38 +51,6 @@ SLACK_S = 0.1  # [s] a request this much longer than what is kept is still grant
 
 class RecorderBusy(RuntimeError):
     """Another recording is being drawn for too long (the caller may try again)."""
-
-
-@dataclass(frozen=True)
-class Recording:
-    """Frames of the scene and plot rows of one window of simulated time."""
-
-    frames: tuple[LiveFrame, ...]  # oldest first, at most RECORD_HZ per simulated second
-    rows: dict[str, np.ndarray]  # method -> (n, len(ROW_COLUMNS)) plot rows of the window
-    source: str  # what was recorded, for the page ("live session", "simulate ...")
-    created: float = field(default_factory=time.time)
-
-    @property
-    def methods(self) -> tuple[str, ...]:
-        return tuple(r.method for r in self.frames[-1].robots)
-
-    @property
-    def start(self) -> float:
-        return self.frames[0].clock
-
-    @property
-    def duration(self) -> float:
-        return self.frames[-1].clock - self.frames[0].clock
-
-    @property
-    def params(self) -> ControllerParams:
-        return self.frames[-1].robots[0].params
-
-    @property
-    def name(self) -> str:
-        """A file name stem: ``pelvic-walk-recording-YYYYmmdd-HHMMSS``."""
-        stamp = time.strftime("%Y%m%d-%H%M%S", time.localtime(self.created))
-        return f"pelvic-walk-recording-{stamp}"
 
 
 def decimate(frames: Sequence[LiveFrame], hz: float = RECORD_HZ) -> tuple[LiveFrame, ...]:

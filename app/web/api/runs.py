@@ -63,12 +63,12 @@ class RunManager:
         return run_id
 
     def _work(self, run_id: str, params: ControllerParams, seed: int | None) -> None:
-        from app.runs import run, spec_of
+        from app.runs import run, spec_of, summarize
 
         self._set(run_id, status="running")
         try:
             cfg = spec_of(params, seed).config()  # the CLI's run (a seed: the study's repeat)
-            summary = run(cfg, max_wall_s=self.max_wall_s).summary()
+            summary = summarize(run(cfg, max_wall_s=self.max_wall_s))
             self._set(run_id, status="done", summary=finite(summary))
         except Exception as exc:  # noqa: BLE001 - reported through GET /api/runs/{id}
             traceback.print_exc()
