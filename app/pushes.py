@@ -5,10 +5,10 @@ One run walks a short plan headless (the same :class:`~app.sim.session.Session` 
 at the middle of one step's single support, through the world's push (MuJoCo
 ``xfrc_applied``). The run *recovers* when the robot has not fallen by the end of the plan.
 
-What the controller can do about a push is limited, and that is the lesson: the CoM MPC
-re-plans from the measured CoM at the next tick and moves the ZMP inside the support foot,
-but nothing moves the footsteps (no step adjustment), so the push must be absorbed inside the
-planned footholds. :func:`largest_survived` bisects the force between a push that is survived
+What the controller can do about a push is limited, and that is the lesson: the CoM MPC keeps
+its plan (its ZMP inside the support foot) and eq. (19) moves the pelvis to bring the measured
+CoM back onto the planned one, but nothing moves the footsteps (no step adjustment), so the
+push must be absorbed inside the planned footholds. :func:`largest_survived` bisects the force between a push that is survived
 and one that is not; falls are not strictly monotonic in the force, so the figure is the
 edge the bisection found, stated with its resolution.
 """

@@ -202,6 +202,36 @@ def test_without_a_shared_demo_every_slot_is_for_private_sessions(pool):
     assert pool.robots() == 0
 
 
+def test_with_an_instructor_only_the_instructor_sees_private_sessions_ids(pool):
+    """Whoever names a private session may change it: its id is unguessable, and with an
+    instructor only the instructor's listing shows the ids (a script gets its own from POST)."""
+    from fastapi.testclient import TestClient
+
+    from app.web.auth import Instructor
+
+    registry = SessionRegistry.start(
+        "private", initial_intent(PARAMS, ["mpc"]), pool, shared_demo=False
+    )
+    app = create_app(registry, instructor=Instructor("T0k3n"))
+    try:
+        with TestClient(app) as client:
+            mine = client.post("/api/sessions").json()["id"]
+            other = client.post("/api/sessions").json()["id"]
+            assert len({mine, other}) == 2 and min(len(mine), len(other)) >= 12
+            student = client.get("/api/sessions").json()["sessions"]
+            assert len(student) == 2 and [s["id"] for s in student] == [None, None]
+            teacher = client.get("/api/sessions", headers={"Authorization": "Bearer T0k3n"}).json()[
+                "sessions"
+            ]
+            assert sorted(s["id"] for s in teacher) == sorted([mine, other])
+            wrong = client.get("/api/sessions", headers={"Authorization": "Bearer nope"})
+            assert [s["id"] for s in wrong.json()["sessions"]] == [None, None]
+            # a script still drives its own session by the id it was given
+            assert client.post(f"/api/sessions/{mine}/sim/pause").json()["paused"] is True
+    finally:
+        registry.shutdown()
+
+
 def test_the_end_of_the_plans_restarts_every_part_together(pool):
     """Robots in different processes walk their whole (short) plan, stand, and the session
     restarts them all at one clock: none restarts alone and stands by (a view once stayed

@@ -16,7 +16,7 @@ shared one in a thread of this process (:class:`~app.live.session.LiveSim`).
 
 from __future__ import annotations
 
-import itertools
+import secrets
 import threading
 import time
 from dataclasses import dataclass
@@ -78,7 +78,6 @@ class SessionRegistry:
         self.idle_s = idle_s
         self._initial = first  # a private session's first intent
         self._lock = threading.Lock()
-        self._ids = itertools.count(1)
         self._entries: dict[str, _Entry] = {}
         if shared is not None:
             self._entries[SHARED] = _Entry(shared, None, time.monotonic())
@@ -140,7 +139,9 @@ class SessionRegistry:
             raise SessionsDisabled(
                 "the server runs one shared session (start it with --sessions private)"
             )
-        sid = f"p{next(self._ids)}"
+        # unguessable: a session is changed by whoever names it, so one student cannot
+        # address another's by counting (an instructor's listing shows them all)
+        sid = f"p-{secrets.token_urlsafe(9)}"
         session = self.pool.open(self._initial, sid=sid)
         with self._lock:
             self._entries[sid] = _Entry(session, owner, time.monotonic())

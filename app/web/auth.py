@@ -23,6 +23,8 @@ import re
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
+from fastapi.security import HTTPBearer
+
 TOKEN_PARAM = "token"
 _TOKEN_IN_TEXT = re.compile(r"(token=)[^&\s\"']+", re.IGNORECASE)
 _BEARER_IN_TEXT = re.compile(r"(bearer\s+)\S+", re.IGNORECASE)
@@ -33,6 +35,16 @@ URL_LOGGERS = (  # a logger's filters see only its own records, not its children
     "websockets",
     "websockets.server",
     "viser",
+)
+
+
+# The API's bearer credential: with an instructor, changing the shared session (and listing the
+# private sessions' ids) needs the token; reading needs nothing.
+BEARER = HTTPBearer(
+    auto_error=False,
+    description="With an instructor (serve --instructor-token), changing the shared session "
+    "and seeing private sessions' ids need the token as a bearer credential; reading needs "
+    "nothing.",
 )
 
 

@@ -199,9 +199,10 @@ LESSONS: tuple[Lesson, ...] = (
         {"step_length": 0.30, "step_time": 1.2},
         ("fixed", "redundancy", "mpc"),
         "front",
-        "Open <b>Push a robot</b> (Controls tab) and push one robot sideways. The CoM MPC "
-        "re-plans from the measured CoM at the next tick and moves the ZMP inside the support "
-        "foot (eq. 18), but <b>nothing moves the footsteps</b>: a push the foot cannot absorb "
+        "Open <b>Push a robot</b> (Controls tab) and push one robot sideways. The CoM MPC keeps "
+        "its plan (its ZMP stays inside the support foot, eq. 18); the pelvis position "
+        "(eq. 19) moves to bring the measured CoM back onto the planned one, but <b>nothing "
+        "moves the footsteps</b>: a push the foot cannot absorb "
         f"topples the robot (try 300 N): it lies ringed in red for {FALL_HOLD_S:g} s, then "
         "every robot restarts together. <code>pelvic-walk push-study</code> measures each "
         "method's limit (README, Push).",

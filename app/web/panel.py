@@ -197,8 +197,9 @@ class ControlPanel:
                         )
         with gui.add_folder("Push a robot", expand_by_default=False):
             gui.add_markdown(
-                "A horizontal push on the torso. The CoM MPC re-plans from the measured state "
-                "at the next tick; **nothing moves the footsteps**, so a push must be absorbed "
+                "A horizontal push on the torso. The CoM MPC keeps its plan and the pelvis "
+                "(eq. 19) moves to bring the measured CoM back onto it; **nothing moves the "
+                "footsteps**, so a push must be absorbed "
                 "within the planned footholds: a strong one makes the robot fall (it lies where "
                 f"it fell for {FALL_HOLD_S:g} s, marked red, then every robot restarts)."
             )

@@ -107,7 +107,7 @@ def create_app(
     for r in (
         health,
         session_router("/api", by_header, instructor),
-        sessions_router(registry),
+        sessions_router(registry, instructor),
         session_router("/api/sessions/{sid}", by_path, instructor),
         recording_router("/api", by_header),
         recording_router("/api/sessions/{sid}", by_path),

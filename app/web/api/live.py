@@ -17,7 +17,7 @@ from collections.abc import Callable
 from typing import Any
 
 from fastapi import APIRouter, Depends, HTTPException, Query
-from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+from fastapi.security import HTTPAuthorizationCredentials
 
 from app.live.frames import LiveFrame
 from app.live.registry import SHARED
@@ -35,7 +35,7 @@ from app.web.api.models import (
     params_dict,
     updates,
 )
-from app.web.auth import Instructor
+from app.web.auth import BEARER, Instructor
 
 # How long a handler waits for the loop to take its intent before answering anyway (a
 # playback answer then says "applied": false): well under the 5 s clients often default to
@@ -142,20 +142,13 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
     )
 
 
-_BEARER = HTTPBearer(
-    auto_error=False,
-    description="With an instructor (serve --instructor-token), changing the shared session "
-    "needs the token as a bearer credential; reading needs nothing.",
-)
-
-
 def instructor_check(
     instructor: Instructor, resolve: Callable[..., tuple[str, SessionView]]
 ) -> Callable[..., tuple[str, SessionView]]:
     """A FastAPI dependency: the session to change, once the caller may change it (anyone,
     unless an instructor drives the shared session: then its token)."""
 
-    session, bearer = Depends(resolve), Depends(_BEARER)
+    session, bearer = Depends(resolve), Depends(BEARER)
 
     def writable(
         s: tuple[str, SessionView] = session,
@@ -273,7 +266,8 @@ def session_router(
     @r.post("/sim/push", tags=["playback"])
     def push(body: PushRequest, s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
         """Push one robot's torso horizontally (MuJoCo ``xfrc_applied``) for ``duration`` s.
-        Nothing re-plans the footsteps: the CoM MPC re-plans from the measured state."""
+        The CoM MPC keeps its plan and eq. (19) moves the pelvis to bring the measured CoM back
+        onto it; nothing moves the footsteps."""
         return _playback(s[1], lambda: s[1].push(body.method, body.force, body.duration))
 
     @r.get("/state", response_model=StateResponse, tags=["state"])

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from fastapi import APIRouter, Header, HTTPException, Path
+from fastapi import APIRouter, Depends, Header, HTTPException, Path
+from fastapi.security import HTTPAuthorizationCredentials
 
 from app.live.pool import PoolFull
 from app.live.registry import (
@@ -22,6 +23,7 @@ from app.live.registry import (
 )
 from app.live.session import SessionView
 from app.web.api.edges import conflict, finite, router
+from app.web.auth import BEARER, Instructor
 
 HEADER = "X-Pelvic-Session"
 
@@ -54,18 +56,32 @@ def resolvers(registry: SessionRegistry):
     return by_header, by_path
 
 
-def sessions_router(registry: SessionRegistry) -> APIRouter:
+def sessions_router(registry: SessionRegistry, instructor: Instructor | None = None) -> APIRouter:
     r = router("/api/sessions", "sessions")
+    teacher = instructor or Instructor(None)
+    bearer = Depends(BEARER)
 
     @r.get("")
-    def list_sessions() -> dict[str, Any]:
-        """The sessions that run, their worker and real-time factor, and the capacity."""
+    def list_sessions(
+        credentials: HTTPAuthorizationCredentials | None = bearer,
+    ) -> dict[str, Any]:
+        """The sessions that run, their worker and real-time factor, and the capacity. With an
+        instructor (serve --instructor-token), private sessions' ids are listed only to the
+        instructor's bearer token: whoever names a session may change it, so students do not
+        see each other's (each browser knows its own; a script gets its id from POST)."""
         pool = registry.pool
+        sessions = registry.list()
+        if teacher.enabled and not teacher.is_token(
+            credentials.credentials if credentials else None
+        ):
+            sessions = [
+                {**s, "id": None, "owner": None} if s["kind"] == "private" else s for s in sessions
+            ]
         return finite(
             {
                 "mode": registry.mode,
                 "shared_demo": registry.has_shared,
-                "sessions": registry.list(),
+                "sessions": sessions,
                 "private_sessions": registry.count_private(),
                 "robot_slots_free": registry.capacity_private,
                 "workers": pool.workers() if pool is not None else [],
