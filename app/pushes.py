@@ -8,9 +8,9 @@ at the middle of one step's single support, through the world's push (MuJoCo
 What the controller can do about a push is limited, and that is the lesson: the CoM MPC keeps
 its plan (its ZMP inside the support foot) and eq. (19) moves the pelvis to bring the measured
 CoM back onto the planned one, but nothing moves the footsteps (no step adjustment), so the
-push must be absorbed inside the planned footholds. :func:`largest_survived` bisects the force between a push that is survived
-and one that is not; falls are not strictly monotonic in the force, so the figure is the
-edge the bisection found, stated with its resolution.
+push must be absorbed inside the planned footholds. :func:`largest_survived` bisects the
+force between a push that is survived and one that is not; falls are not strictly monotonic in
+the force, so the figure is the edge the bisection found, stated with its resolution.
 """
 
 from __future__ import annotations
