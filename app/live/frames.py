@@ -78,7 +78,7 @@ class RobotFrame:
     energy: float  # [J] cumulative positive joint work of this walk (eq. 44)
     solver_failures: int
     pushing: bool  # a push acts on the torso now
-    kappa: float  # kappa(J_low) of eq. (45)
+    kappa_low: float  # kappa(J_low) of eq. (45)
     kappa_legs: float  # kappa of J_low's 12 leg columns: it explodes as a knee straightens
     reach: np.ndarray  # (2,) hip-to-ankle / leg length, left and right
     speed_limited: bool  # the IK held a joint at its speed limit this tick
@@ -218,7 +218,7 @@ def robot_frame(
         energy=m.energy if m is not None else 0.0,
         solver_failures=int(sum(session.walker.failure_counts.values())),
         pushing=world.pushing,
-        kappa=out.kappa_low if out is not None else math.nan,
+        kappa_low=out.kappa_low if out is not None else math.nan,
         kappa_legs=out.kappa_legs if out is not None else math.nan,
         reach=out.reach.copy() if out is not None else np.full(2, math.nan),
         speed_limited=bool(out is not None and out.speed_limited),

@@ -26,7 +26,7 @@ ROW_COLUMNS = (
     "waist_deg",  # measured waist yaw [deg]
     "waist_rate_deg_s",  # commanded waist yaw rate [deg/s]
     "yaw_momentum",  # whole-body yaw momentum about the CoM [kg m^2/s]
-    "kappa",  # kappa of J_low's leg columns (eq. 45): it explodes as a knee straightens
+    "kappa_legs",  # kappa of J_low's leg columns (eq. 45): it explodes as a knee straightens
     "energy_two_step",  # energy of the last completed two-step window [J] (as Table 1)
     "in_dsp",  # 1 in a double support, 0 in a single support, NaN standing
     "step_index",

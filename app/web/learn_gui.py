@@ -45,7 +45,7 @@ COLUMNS = {  # row label of each live number (Lesson.numbers)
     "step": "step length in force",
     "falls": "falls since the lesson started",
     "reach": "leg reach now (max since the last change)",
-    "kappa": "kappa(J) of the legs now (max since the last change)",
+    "kappa_legs": "kappa(J) of the legs now (max since the last change)",
     "waist": "waist yaw now (last two steps)",
     "rate": "peak waist rate, last two steps",
     "rate_now": "waist rate now",
@@ -305,7 +305,7 @@ class LearnTab:
             return str(r.falls - self.falls0.get(r.method, r.falls))
         if key == "reach":
             return f"{_num(float(np.max(r.reach)), 3)} ({_num(tally.reach_max, 3)})"
-        if key == "kappa":
+        if key == "kappa_legs":
             return f"{_num(r.kappa_legs)} ({_num(tally.kappa_max)})"
         if key == "waist":
             w = col("waist_deg")

@@ -110,7 +110,7 @@ LESSONS: tuple[Lesson, ...] = (
         f"{_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
         "press the preset <i>Eq. 5's 0.42 m</i> and the fixed robot falls.",
         ("4", "5", "45"),
-        ("status", "shares", "reach", "kappa", "waist", "falls"),
+        ("status", "shares", "reach", "kappa_legs", "waist", "falls"),
     ),
     Lesson(
         "2. What the prediction does",
@@ -160,7 +160,7 @@ LESSONS: tuple[Lesson, ...] = (
         "kappa; then shorten the <b>horizon</b> below one step (1.2 s): the MPC no longer sees "
         "the next foothold in time.",
         ("31", "37"),
-        ("settings", "waist", "reach", "kappa", "status", "falls"),
+        ("settings", "waist", "reach", "kappa_legs", "status", "falls"),
         {"pelvis": {"k_pel": 0.10}},
     ),
     Lesson(

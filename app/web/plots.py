@@ -31,13 +31,13 @@ PLOTS: tuple[tuple[str, str, tuple[float, float]], ...] = (  # (row column, titl
     ("waist_rate_deg_s", "Waist yaw rate [deg/s]", (-60.0, 60.0)),
     ("yaw_momentum", "Yaw momentum [kg m^2/s]", (-0.5, 0.5)),
     (
-        "kappa",
+        "kappa_legs",
         "kappa(J) of the leg columns (eq. 45), log scale; dashed: knee nearly straight",
         (1.0, 10 * KAPPA_SINGULAR),
     ),
     ("energy_two_step", "Energy per two steps [J] (eq. 44, as Table 1)", (0.0, 100.0)),
 )
-LOG_PLOTS = {"kappa"}  # drawn on a log10 axis: a straight knee's 1e8 beside a clean 30
+LOG_PLOTS = {"kappa_legs"}  # drawn on a log10 axis: a straight knee's 1e8 beside a clean 30
 LOG_MAX = 1e12  # the log axis's top at most (kappa is finite but unbounded at a straight knee)
 
 
@@ -143,7 +143,7 @@ class LivePlots:
             log = col in LOG_PLOTS
             lo, hi = log_span(ys, spec[2]) if log else _span(ys, spec[2])
             band = np.where(dsp, hi, lo)  # filled down from the line: shaded in the DSP only
-            extra = (np.full(len(x), KAPPA_SINGULAR),) if col == "kappa" else ()
+            extra = (np.full(len(x), KAPPA_SINGULAR),) if col == "kappa_legs" else ()
             handle.data = (
                 x.astype(np.float32),
                 *(y.astype(np.float32) for y in ys),
@@ -194,7 +194,7 @@ class LivePlots:
         )
         with self.folder:
             for col, title, _span_min in PLOTS:
-                kappa = col == "kappa"
+                kappa = col == "kappa_legs"
                 series = (x_axis, *robots, *((singular,) if kappa else ()), dsp(col in LOG_PLOTS))
                 empty = tuple(np.ones(2, dtype=np.float32) for _ in series)
                 self.handles[col] = self.gui.add_uplot(

@@ -72,7 +72,9 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
             "walks_completed": r.walks_completed,
             "falls": r.falls,
             "waist_angle_deg": math.degrees(r.waist_angle),
-            "kappa": r.kappa,
+            "kappa": r.kappa_low,  # the key of old: kappa_low's value
+            "kappa_low": r.kappa_low,
+            "kappa_legs": r.kappa_legs,
             "yaw_momentum": r.yaw_momentum,
             "reach": r.reach,
             "zmp_ref": r.zmp_ref,
