@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test check lint clean chromium
+.PHONY: run test check lint clean chromium peers
 
 $(BIN)/python:
 	@$(PY) -c 'import sys; assert sys.version_info[:2] == (3, 11)' 2>/dev/null \
@@ -53,5 +53,15 @@ lint: $(TEST_STAMP)
 	$(BIN)/mypy
 	$(BIN)/lint-imports
 
+# A peer for `pelvic-walk bench`: placo in a venv of its own (it pins an older Pinocchio than
+# ours, so it cannot share .venv); the bench finds it there and runs placo's walk loop on our
+# robot beside our tick.
+PEERS := .venv-peers
+peers: $(PEERS)/bin/python
+$(PEERS)/bin/python:
+	$(PY) -m venv $(PEERS)
+	$(PEERS)/bin/pip install -q --upgrade pip
+	$(PEERS)/bin/pip install -q 'placo>=0.10,<0.11'
+
 clean:
-	rm -rf $(VENV) .pytest_cache
+	rm -rf $(VENV) $(PEERS) .pytest_cache
