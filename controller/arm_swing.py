@@ -28,6 +28,7 @@ from __future__ import annotations
 import numpy as np
 
 from controller.ik import velocity_bounds
+from controller.jit import kernel
 from controller.params import ArmParams
 from controller.qp import QP, QpSolver, frozen
 
@@ -35,6 +36,19 @@ from controller.qp import QP, QpSolver, frozen
 def yaw_momentum(a_yaw: np.ndarray, q_dot: np.ndarray) -> float:
     """Yaw angular momentum a_yaw . q_dot [kg m^2/s] (eq. 41 or 42)."""
     return float(np.dot(np.asarray(a_yaw, dtype=float), np.asarray(q_dot, dtype=float)))
+
+
+@kernel
+def _arm_cost(a_low_yaw, q_dot_low, a, q, q_up_init, w1, w2, w3, dt):
+    """P (n, n) and q (n,) of eq. (43): h_low = a_low . q_dot_low (eq. 41),
+    P = omega1 a a' + (omega2 dt^2 + omega3) I, q = omega1 h_low a - omega2 dt (q_init - q)."""
+    h_low = np.dot(a_low_yaw, q_dot_low)
+    r = q_up_init - q  # (n,) pose error [rad]
+    n = a.shape[0]
+    P = w1 * (a.reshape(n, 1) * a.reshape(1, n))  # omega1 a a'
+    for i in range(n):
+        P[i, i] += w2 * dt * dt + w3  # + (omega2 dt^2 + omega3) I
+    return P, w1 * h_low * a - w2 * dt * r
 
 
 def build_arm_qp(
@@ -67,15 +81,21 @@ def build_arm_qp(
     """
     a = np.asarray(a_up_yaw, dtype=float)
     q = np.asarray(q_up, dtype=float)
-    n = a.shape[0]
-    h_low = yaw_momentum(a_low_yaw, q_dot_low)
-    r = np.asarray(q_up_init, dtype=float) - q  # (4,) pose error [rad]
-    w1, w2, w3 = params.omega1, params.omega2, params.omega3
-    P = w1 * (a[:, None] * a[None, :])  # omega1 a a'
-    P.flat[:: n + 1] += w2 * dt * dt + w3  # + (omega2 dt^2 + omega3) I
-    c = w1 * h_low * a - w2 * dt * r
-    lo, hi = velocity_bounds(q, q_min, q_max, dt, qd_max)
-    return QP(P, c, _bound_rows(n), lo, hi)
+    P, c = _arm_cost(
+        np.asarray(a_low_yaw, dtype=float),
+        np.asarray(q_dot_low, dtype=float),
+        a,
+        q,
+        np.asarray(q_up_init, dtype=float),
+        params.omega1,
+        params.omega2,
+        params.omega3,
+        dt,
+    )
+    lo, hi = velocity_bounds(
+        q, np.asarray(q_min, dtype=float), np.asarray(q_max, dtype=float), dt, qd_max
+    )
+    return QP(P, c, _bound_rows(a.shape[0]), lo, hi)
 
 
 _BOUND_ROWS: dict[int, np.ndarray] = {}

@@ -44,6 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.footsteps import FootstepPlan
+from controller.jit import kernel
 from controller.params import ComMpcParams, horizon_samples
 from controller.qp import QP, QpSolver, frozen
 
@@ -79,6 +80,26 @@ class ComPlan:
             from_state, from_jerk = self.zmp_maps
             self._zmp = from_state @ self.state + from_jerk @ self.jerk
         return self._zmp
+
+
+@kernel
+def _qp_vectors(zmp_from_state, q_zmp, q_dv, x0, zmp_ref, zmp_lo, zmp_hi):
+    """q, l, u (2N,) of eq. (18) for the state x0 (3, 2), per axis stacked [x; y]
+    (:meth:`ComMpc.build`)."""
+    z_free = zmp_from_state @ x0  # (N, 2) ZMP with zero jerk, Pzs x0 (eq. 16-17)
+    q = q_zmp @ (z_free - zmp_ref) + q_dv @ x0  # alpha Pzu'(Pzs x0 - Zref) + beta Pdu'(Pds x0)
+    l = zmp_lo - z_free  # Z^min - Pzs x0 <= Pzu U
+    u = zmp_hi - z_free  # Pzu U <= Z^max - Pzs x0
+    return q.T.ravel(), l.T.ravel(), u.T.ravel()
+
+
+@kernel
+def _predicted(com_from_state, com_from_jerk, A_ctrl, B_ctrl, x0, jerk):
+    """The predicted CoM (N, 2) (eq. 25-26) and the state after one control period (3, 2),
+    A x0 + B u0, from the state x0 (3, 2) and the jerks (N, 2)."""
+    com = com_from_state @ x0 + com_from_jerk @ jerk
+    next_state = A_ctrl @ x0 + B_ctrl.reshape(3, 1) * jerk[0]
+    return com, next_state
 
 
 def lipm_discrete(T: float) -> tuple[np.ndarray, np.ndarray]:
@@ -203,12 +224,16 @@ class ComMpc:
         Returns:
             The QP over U = [U_x; U_y] (2N jerks [m/s^3]).
         """
-        x0 = np.asarray(state, dtype=float)
-        z_free = self.zmp_from_state @ x0  # (N, 2) ZMP with zero jerk
-        q = self._q_zmp @ (z_free - zmp_ref) + self._q_dv @ x0  # (N, 2)
-        l = np.asarray(zmp_lo, dtype=float) - z_free
-        u = np.asarray(zmp_hi, dtype=float) - z_free
-        return QP(self.hessian, q.T.ravel(), self.constraint, l.T.ravel(), u.T.ravel())
+        q, l, u = _qp_vectors(
+            self.zmp_from_state,
+            self._q_zmp,
+            self._q_dv,
+            np.asarray(state, dtype=float),
+            np.asarray(zmp_ref, dtype=float),
+            np.asarray(zmp_lo, dtype=float),
+            np.asarray(zmp_hi, dtype=float),
+        )
+        return QP(self.hessian, q, self.constraint, l, u)
 
     def sample_times(self, t: float) -> np.ndarray:
         """(N,) [s] the predicted samples' absolute times t + k T_p, k = 1..N."""
@@ -255,8 +280,10 @@ class ComMpc:
             jerk = self._prev_jerk[np.minimum(np.arange(N) + max(shift, 0), N - 1)]
         else:
             jerk = np.zeros((N, 2))
-        com = self._com_from_state @ x0 + self._com_from_jerk @ jerk  # (N, 2), eq. (25-26)
-        next_state = self.A_ctrl @ x0 + self.B_ctrl[:, None] * jerk[0]  # A x0 + B u0
+        # eq. (25-26) and A x0 + B u0 over one control period
+        com, next_state = _predicted(
+            self._com_from_state, self._com_from_jerk, self.A_ctrl, self.B_ctrl, x0, jerk
+        )
         return ComPlan(
             times,
             com,

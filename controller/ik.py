@@ -45,32 +45,56 @@ import math
 
 import numpy as np
 
+from controller.jit import kernel
 from controller.params import IkParams
 from controller.qp import QP, QpSolver, frozen
 
 WAIST = 0  # index of the waist yaw in q_low (13,)
 N_LOW = 13
 METHODS = ("fixed", "redundancy", "mpc")
+_METHOD_CODE = {name: i for i, name in enumerate(METHODS)}  # the kernels' method argument
+_FIXED, _REDUNDANCY, _MPC = (_METHOD_CODE[name] for name in METHODS)
 # The bound rows' matrix, one shared read-only object: the QP solver never re-factors it
 # (controller.qp tracks frozen matrices by identity).
 BOUND_ROWS = frozen(np.eye(N_LOW))
 
 
-def velocity_bounds(
-    q: np.ndarray, q_min: np.ndarray, q_max: np.ndarray, dt: float, speed_limit: float
-) -> tuple[np.ndarray, np.ndarray]:
+@kernel
+def velocity_bounds(q, q_min, q_max, dt, speed_limit):
     """Joint-angle limits as velocity bounds intersected with |q_dot| <= speed_limit.
 
     A joint already beyond a limit gets a bound that moves it back (at most ``speed_limit``),
-    so ``lo <= hi`` always holds.
+    so ``lo <= hi`` always holds. ``q``, ``q_min``, ``q_max``: arrays of one shape [rad].
 
     Returns:
         (lo, hi), each shaped like ``q`` [rad/s].
     """
-    # np.minimum(np.maximum(.)) = np.clip without its Python-level overhead
-    lo = np.minimum(np.maximum((np.asarray(q_min) - q) / dt, -speed_limit), speed_limit)
-    hi = np.minimum(np.maximum((np.asarray(q_max) - q) / dt, -speed_limit), speed_limit)
+    lo = np.minimum(np.maximum((q_min - q) / dt, -speed_limit), speed_limit)
+    hi = np.minimum(np.maximum((q_max - q) / dt, -speed_limit), speed_limit)
     return lo, np.maximum(hi, lo)
+
+
+@kernel
+def _ik_qp(P, J, v, q, q_min, q_max, damping, dt, speed_limit, method, waist_rate, weight):
+    """P (13, 13) (J'J on entry, in place), c (13,), lo, hi (13,) of eq. (39) for one method
+    (:func:`build_ik`)."""
+    for i in range(P.shape[0]):
+        P[i, i] += damping  # + damping I
+    c = -(J.T @ v)  # (13,)
+    lo, hi = velocity_bounds(q, q_min, q_max, dt, speed_limit)
+    if method == _FIXED:  # the waist held
+        lo[WAIST] = hi[WAIST] = 0.0
+    elif method == _MPC:  # the waist at the MPC's rate, clipped into its bounds
+        w = waist_rate
+        if lo[WAIST] > w:
+            w = lo[WAIST]
+        if hi[WAIST] < w:
+            w = hi[WAIST]
+        lo[WAIST] = hi[WAIST] = w
+    else:  # redundancy: w/2 (q_w + dt qd_w)^2 = w dt^2/2 qd_w^2 + w dt q_w qd_w + const
+        P[WAIST, WAIST] += weight * dt * dt
+        c[WAIST] += weight * dt * q[WAIST]
+    return P, c, lo, hi
 
 
 def build_ik(
@@ -99,26 +123,28 @@ def build_ik(
     Returns:
         QP with variable q_dot (13,), A = identity (13 bound rows).
     """
-    if method not in METHODS:
+    code = _METHOD_CODE.get(method)
+    if code is None:
         raise ValueError(f"unknown IK method {method!r} (one of {', '.join(METHODS)})")
+    if code == _MPC and waist_rate is None:
+        raise ValueError("method 'mpc' needs waist_rate (the pelvic MPC's theta_dot)")
     J = np.asarray(J_low, dtype=float)
-    v = np.asarray(v_des, dtype=float)
-    q = np.asarray(q_low, dtype=float)
-    P = J.T @ J  # (13, 13)
-    P.flat[:: N_LOW + 1] += params.damping  # + damping I
-    c = -(J.T @ v)  # (13,)
-    lo, hi = velocity_bounds(q, q_min, q_max, dt, params.joint_speed_limit)
-    if method == "fixed":
-        lo[WAIST] = hi[WAIST] = 0.0
-    elif method == "mpc":
-        if waist_rate is None:
-            raise ValueError("method 'mpc' needs waist_rate (the pelvic MPC's theta_dot)")
-        w = min(max(float(waist_rate), float(lo[WAIST])), float(hi[WAIST]))  # clip
-        lo[WAIST] = hi[WAIST] = w
-    else:  # redundancy: w/2 (q_w + dt qd_w)^2 = w dt^2/2 qd_w^2 + w dt q_w qd_w + const
-        w = params.redundancy_weight
-        P[WAIST, WAIST] += w * dt * dt
-        c[WAIST] += w * dt * q[WAIST]
+    # J'J by numpy: its matmul sees the transposed pair and computes a symmetric product
+    # (BLAS syrk), exactly symmetric, where a general product could differ by rounding
+    P, c, lo, hi = _ik_qp(
+        J.T @ J,
+        J,
+        np.asarray(v_des, dtype=float),
+        np.asarray(q_low, dtype=float),
+        np.asarray(q_min, dtype=float),
+        np.asarray(q_max, dtype=float),
+        params.damping,
+        dt,
+        params.joint_speed_limit,
+        code,
+        0.0 if waist_rate is None else float(waist_rate),
+        params.redundancy_weight,
+    )
     return QP(P, c, BOUND_ROWS, lo, hi)
 
 
@@ -129,27 +155,57 @@ def solve_ik(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:
     return res.x, res.ok
 
 
-def log3(R: np.ndarray) -> np.ndarray:
+@kernel
+def log3(R):
     """Rotation vector (axis * angle, (3,)) of a rotation matrix R (3, 3); angle in [0, pi]."""
-    R = np.asarray(R, dtype=float)
-    (r00, r01, r02), (r10, r11, r12), (r20, r21, r22) = R.tolist()  # scalars: no numpy overhead
-    cos = min(max(0.5 * ((r00 + r11 + r22) - 1.0), -1.0), 1.0)
+    r00, r01, r02 = R[0, 0], R[0, 1], R[0, 2]
+    r10, r11, r12 = R[1, 0], R[1, 1], R[1, 2]
+    r20, r21, r22 = R[2, 0], R[2, 1], R[2, 2]
+    cos = 0.5 * ((r00 + r11 + r22) - 1.0)
+    cos = -1.0 if cos < -1.0 else (1.0 if cos > 1.0 else cos)
     angle = math.acos(cos)
-    w = (r21 - r12, r02 - r20, r10 - r01)  # 2 sin(a) axis
+    w = np.array([r21 - r12, r02 - r20, r10 - r01])  # 2 sin(a) axis
     if angle < 1e-6:
-        return np.array([0.5 * w[0], 0.5 * w[1], 0.5 * w[2]])  # first order: R ~ I + [phi]x
+        return 0.5 * w  # first order: R ~ I + [phi]x
     if math.pi - angle > 1e-4:
-        f = angle / (2.0 * math.sin(angle))
-        return np.array([f * w[0], f * w[1], f * w[2]])
-    w_vec = np.array(w)
+        return angle / (2.0 * math.sin(angle)) * w
     # Near pi: axis from the diagonal of R = 2 a a' - I (+ small antisymmetric part).
     B = 0.5 * (R + np.eye(3))
     i = int(np.argmax(np.diag(B)))
     axis = B[:, i] / np.sqrt(max(B[i, i], 1e-12))
-    axis /= np.linalg.norm(axis)
-    if axis @ w_vec < 0.0:
+    axis = axis / np.linalg.norm(axis)
+    if axis @ w < 0.0:
         axis = -axis
     return angle * axis
+
+
+@kernel
+def _pose_error(T_cur, R_des, p_des):
+    """[p_des - p_cur; log3(R_des R_cur^T)] (6,) of the pose T_cur (4, 4)."""
+    e = np.empty(6)
+    e[:3] = p_des - T_cur[:3, 3]
+    e[3:] = log3(R_des @ np.ascontiguousarray(T_cur[:3, :3].T))
+    return e
+
+
+@kernel
+def _foot_twists(T_left, R_left, p_left, v_ff_left, T_right, R_right, p_right, v_ff_right, gain):
+    """(12,) feed-forward + gain * pose error, left then right (:func:`foot_velocity_command`)."""
+    v = np.empty(12)
+    v[:6] = v_ff_left + gain * _pose_error(T_left, R_left, p_left)
+    v[6:] = v_ff_right + gain * _pose_error(T_right, R_right, p_right)
+    return v
+
+
+_FLAT = np.eye(3)  # R_des of a flat foot
+
+
+def _rotation_and_position(T_des: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(R_des (3, 3), p_des (3,)) of a desired pose (4, 4) or position (3,) (a flat foot)."""
+    T_des = np.asarray(T_des, dtype=float)
+    if T_des.ndim == 1:
+        return _FLAT, T_des
+    return np.ascontiguousarray(T_des[:3, :3]), np.ascontiguousarray(T_des[:3, 3])
 
 
 def pose_error(T_cur: np.ndarray, T_des: np.ndarray) -> np.ndarray:
@@ -158,14 +214,7 @@ def pose_error(T_cur: np.ndarray, T_des: np.ndarray) -> np.ndarray:
     ``T_des`` may be a position (3,): a flat foot, R_des = I, so the rotation error is
     log3(R_cur^T) (the walker's feet never turn).
     """
-    e = np.empty(6)
-    if T_des.ndim == 1:
-        e[:3] = T_des - T_cur[:3, 3]
-        e[3:] = log3(T_cur[:3, :3].T)
-    else:
-        e[:3] = T_des[:3, 3] - T_cur[:3, 3]
-        e[3:] = log3(T_des[:3, :3] @ T_cur[:3, :3].T)
-    return e
+    return _pose_error(np.asarray(T_cur, dtype=float), *_rotation_and_position(T_des))
 
 
 def foot_velocity_command(
@@ -187,7 +236,16 @@ def foot_velocity_command(
     Returns:
         (12,) [left twist (6); right twist (6)].
     """
-    v = np.empty(12)
-    v[:6] = np.asarray(v_ff_left, dtype=float) + gain * pose_error(T_cur_left, T_des_left)
-    v[6:] = np.asarray(v_ff_right, dtype=float) + gain * pose_error(T_cur_right, T_des_right)
-    return v
+    R_left, p_left = _rotation_and_position(T_des_left)
+    R_right, p_right = _rotation_and_position(T_des_right)
+    return _foot_twists(
+        np.asarray(T_cur_left, dtype=float),
+        R_left,
+        p_left,
+        np.asarray(v_ff_left, dtype=float),
+        np.asarray(T_cur_right, dtype=float),
+        R_right,
+        p_right,
+        np.asarray(v_ff_right, dtype=float),
+        float(gain),
+    )

@@ -53,13 +53,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from controller.jit import kernel
 from controller.params import PelvisMpcParams
 from controller.qp import QP, QpSolver, frozen
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True, eq=False)
 class PelvisPlan:
-    """Output of one pelvic-rotation MPC solve."""
+    """Output of one pelvic-rotation MPC solve. Read-only by contract."""
 
     angles: np.ndarray  # (N,) predicted theta_k, k = 1..N [rad]
     rates: np.ndarray  # (N,) predicted theta_dot_k, k = 1..N [rad/s]
@@ -68,6 +69,33 @@ class PelvisPlan:
     next_angle: float  # theta after ONE control period with the first input (eq. 38) [rad]
     next_rate: float  # theta_dot_{i+1} [rad/s]: the waist-yaw velocity pinned in the IK
     ok: bool
+
+
+@kernel
+def _qp_vectors(ref, x0, PA_ang, alpha, bMtM, sM, angle_limit, acc_limit, acc_scale):
+    """The free response f = P_A,angle x0 (N,) of the state x0 = [theta, theta_dot] and the
+    QP on Theta (module docstring) for the reference (N,): q = -alpha ref - beta M'M f (N,),
+    l, u (2N,): the angle rows -angle_limit <= Theta <= angle_limit, the acceleration rows
+    s (-acc_limit + M f) <= s M Theta <= s (acc_limit + M f)."""
+    n = ref.shape[0]
+    free = PA_ang @ x0  # (N,) angles with zero input
+    q = -alpha * ref - bMtM @ free
+    mf = sM @ free  # s M f
+    lo = np.empty(2 * n)
+    hi = np.empty(2 * n)
+    lo[:n] = -angle_limit
+    hi[:n] = angle_limit
+    lo[n:] = -acc_limit * acc_scale + mf
+    hi[n:] = acc_limit * acc_scale + mf
+    return free, q, lo, hi
+
+
+@kernel
+def _inputs_and_rates(angles, free, M, PA_rate, PB_rate, x0):
+    """The inputs U = M (Theta - f) (N,) that produce the angles Theta from the free response
+    f, and the predicted rates theta_dot_1..N = P_A,rate x0 + P_B,rate U (eq. 35)."""
+    u = M @ (angles - free)
+    return u, PA_rate @ x0 + PB_rate @ u
 
 
 class PelvisMpc:
@@ -115,8 +143,9 @@ class PelvisMpc:
             for j in range(k + 1):
                 PB[2 * k : 2 * k + 2, j] = powers[k - j] @ self._B
         self._PB = PB  # (2N, N)
-        self._PA_ang, self._PB_ang = self._PA[0::2], self._PB[0::2]  # angle rows (N, 2), (N, N)
-        self._PA_rate, self._PB_rate = self._PA[1::2], self._PB[1::2]
+        # angle rows (N, 2), (N, N) and rate rows, contiguous (the kernels' matrix products)
+        self._PA_ang, self._PB_ang = (np.ascontiguousarray(a[0::2]) for a in (self._PA, self._PB))
+        self._PA_rate, self._PB_rate = (np.ascontiguousarray(a[1::2]) for a in (self._PA, self._PB))
         self._M = np.linalg.inv(self._PB_ang)  # (N, N): U = M (Theta - f)
         a, b = params.alpha, params.beta
         self._MtM = self._M.T @ self._M
@@ -137,46 +166,47 @@ class PelvisMpc:
         the inputs are ``self.inputs_from_angles(x, theta, theta_dot)``.
         """
         ref = np.asarray(theta_ref, dtype=float).reshape(-1)
-        x0 = np.array([theta, theta_dot], dtype=float)
-        return self._build(ref, self._PA_ang @ x0)
+        return self._build(ref, np.array([theta, theta_dot], dtype=float))[1]
 
-    def _build(self, ref: np.ndarray, free: np.ndarray) -> QP:
-        """The QP for the reference (N,) and the free response f = P_A,angle x0 (N,)."""
+    def _build(self, ref: np.ndarray, x0: np.ndarray) -> tuple[np.ndarray, QP]:
+        """The free response f = P_A,angle x0 (N,) and the QP for the reference (N,)."""
         n = self.n_samples
         if ref.shape[0] != n:
             raise ValueError(f"theta_ref has {ref.shape[0]} samples, the MPC has {n}")
-        q = -self.params.alpha * ref - self._bMtM @ free  # - alpha ref - beta M'M f
-        lim, acc, s = self._angle_limit, self.params.acc_limit, self._acc_scale
-        mf = self._sM @ free  # s M f
-        lo = np.empty(2 * n)
-        hi = np.empty(2 * n)
-        lo[:n] = -lim
-        hi[:n] = lim
-        np.add(-acc * s, mf, out=lo[n:])
-        np.add(acc * s, mf, out=hi[n:])
-        return QP(self._P, q, self._Acon, lo, hi)
+        p = self.params
+        free, q, lo, hi = _qp_vectors(
+            ref,
+            x0,
+            self._PA_ang,
+            p.alpha,
+            self._bMtM,
+            self._sM,
+            self._angle_limit,
+            p.acc_limit,
+            self._acc_scale,
+        )
+        return free, QP(self._P, q, self._Acon, lo, hi)
 
     def solve(self, theta: float, theta_dot: float, theta_ref: np.ndarray) -> PelvisPlan:
         """Solve eq. (37) and integrate the first input over one control period (eq. 38)."""
-        ref = np.asarray(theta_ref, dtype=float).reshape(-1)
+        ref = np.array(theta_ref, dtype=float).reshape(-1)  # a copy: the plan keeps it
         x0 = np.array([theta, theta_dot], dtype=float)
-        free = self._PA_ang @ x0  # (N,) angles with zero input
-        res = self.solver.solve(self._build(ref, free))
+        free, qp = self._build(ref, x0)
+        res = self.solver.solve(qp)
         if res.ok:
             angles = res.x  # the QP's variable (module docstring)
-            u = self._M @ (angles - free)  # (N,) inputs from the angles
+            u, rates = _inputs_and_rates(angles, free, self._M, self._PA_rate, self._PB_rate, x0)
+            u0 = float(u[0])
         else:
             u = self._brake(theta_dot)
             angles = free + self._PB_ang @ u
-        rates = self._PA_rate @ x0 + self._PB_rate @ u
+            rates = self._PA_rate @ x0 + self._PB_rate @ u
+            acc = self.params.acc_limit
+            u0 = float(np.clip(-theta_dot / self.control_dt, -acc, acc))
         dt = self.control_dt
-        if res.ok:
-            u0 = float(u[0])
-        else:
-            u0 = float(np.clip(-theta_dot / dt, -self.params.acc_limit, self.params.acc_limit))
         next_rate = theta_dot + dt * u0
         next_angle = theta + dt * theta_dot + 0.5 * dt * dt * u0
-        return PelvisPlan(angles, rates, u, ref.copy(), next_angle, next_rate, res.ok)
+        return PelvisPlan(angles, rates, u, ref, next_angle, next_rate, res.ok)
 
     def inputs_from_angles(self, angles: np.ndarray, theta: float, theta_dot: float) -> np.ndarray:
         """U (N,) [rad/s^2] that produces the predicted angles (N,) from [theta, theta_dot]."""

@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from controller.jit import kernel
 from controller.params import LATERAL_MODES
 
 HIP_HALF_WIDTH = 0.105  # [m] lateral distance from the pelvis centre to each hip joint
@@ -76,11 +77,18 @@ def lateral_distances(
         half_width: half the step width [m] (the nominal distance).
         floor: [m] smallest |distance| (``current`` and ``predicted``).
     """
-    n = np.shape(p_pelvis)[0] if np.ndim(p_pelvis) == 2 else 1
+    p_pelvis = np.asarray(p_pelvis, dtype=float)
+    n = p_pelvis.shape[0] if p_pelvis.ndim == 2 else 1
     if mode == "nominal":
         return np.tile((half_width, -half_width), (n, 1))
     elif mode == "current":
-        dy = np.array([p_left_now[1] - p_pelvis_now[1], p_right_now[1] - p_pelvis_now[1]])
+        return _current_lateral(
+            np.asarray(p_pelvis_now, dtype=float),
+            np.asarray(p_left_now, dtype=float),
+            np.asarray(p_right_now, dtype=float),
+            float(floor),
+            n,
+        )
     elif mode == "predicted":
         p_pelvis = np.atleast_2d(p_pelvis)
         dy = np.column_stack(
@@ -92,8 +100,35 @@ def lateral_distances(
     else:
         raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
     # the left foot lies at +y of the pelvis, the right at -y: keep each at least the floor
-    dy = np.stack([np.maximum(dy[..., 0], floor), np.minimum(dy[..., 1], -floor)], axis=-1)
-    return np.tile(dy, (n, 1)) if dy.ndim == 1 else dy
+    return np.stack([np.maximum(dy[..., 0], floor), np.minimum(dy[..., 1], -floor)], axis=-1)
+
+
+@kernel
+def _current_lateral(p_pelvis_now, p_left_now, p_right_now, floor, n):
+    """(n, 2) the ``current`` lateral distances, held over the horizon: the left and right
+    feet's y from the pelvis's now, at least ``floor`` from zero (left +, right -)."""
+    left = p_left_now[1] - p_pelvis_now[1]
+    right = p_right_now[1] - p_pelvis_now[1]
+    out = np.empty((n, 2))
+    out[:, 0] = floor if left < floor else left  # NaN passes, as np.maximum
+    out[:, 1] = -floor if right > -floor else right
+    return out
+
+
+@kernel
+def _reference_angles(p_pelvis, p_left, p_right, k_pel, lateral):
+    """(N,) eq. (28)-(33) sample by sample: dx per foot, atan(k_pel dx / dy) per foot, minus
+    their mean (sign rule of the module docstring); ``lateral`` has N rows or one, held."""
+    n = p_pelvis.shape[0]
+    out = np.empty(n)
+    for k in range(n):
+        i = k if lateral.shape[0] > 1 else 0
+        dx_left = p_left[k, 0] - p_pelvis[k, 0]  # eq. (28)
+        dx_right = p_right[k, 0] - p_pelvis[k, 0]  # eq. (29)
+        left = np.arctan(k_pel * dx_left / lateral[i, 0])  # eq. (31)
+        right = np.arctan(k_pel * dx_right / lateral[i, 1])  # eq. (32)
+        out[k] = -0.5 * (left + right)  # eq. (30), (33)
+    return out
 
 
 def reference_pelvic_angles(
@@ -116,15 +151,16 @@ def reference_pelvic_angles(
     Returns:
         (N,) reference pelvic angles theta_ref(k) [rad], positive about +z.
     """
-    p_pelvis = np.atleast_2d(p_pelvis)
-    # dx of eq. (28)-(29) for both feet: (N, 2) [m]
-    dx = np.column_stack((np.atleast_2d(p_left)[:, 0], np.atleast_2d(p_right)[:, 0]))
-    dx -= p_pelvis[:, :1]
     lateral = np.asarray(lateral, dtype=float)
     if lateral[0, 0] <= 0.0 or lateral[0, 1] >= 0.0:  # held over the horizon, or per sample
         raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
-    # eq. (31)-(32) per foot, eq. (30) their mean, with the sign rule of the module docstring
-    return -0.5 * np.arctan(k_pel * dx / lateral).sum(axis=1)
+    return _reference_angles(_rows(p_pelvis), _rows(p_left), _rows(p_right), float(k_pel), lateral)
+
+
+def _rows(a: np.ndarray) -> np.ndarray:
+    """``a`` as a float array of rows (N, 2) (one row if it is a single point)."""
+    a = np.asarray(a, dtype=float)
+    return a if a.ndim == 2 else a.reshape(1, -1)
 
 
 def hip_points(

@@ -37,10 +37,39 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
+from controller.jit import kernel
+
 INF = 1e20  # OSQP's infinity; DAQP takes the same large bound
 # numpy's reductions called directly (ndarray.sum / .min add a Python-level wrapper per call)
 _sum = np.add.reduce
 _fmin = np.fmin.reduce  # the smallest value, NaNs ignored
+_INVALID = "infeasible bounds or non-finite data"
+_EQUALITY = 5  # DAQP's sense of an equality row (l = u)
+
+
+@kernel
+def _daqp_vectors(q, l, u, bu, bl, eq):  # pragma: no cover - compiled
+    """Check a QP's vectors and write DAQP's bounds; returns -1 if ``q`` is not finite or a
+    bound pair is crossed (l > u + 1e-9), else 1 if the equality rows changed, else 0.
+
+    ``bu``, ``bl`` (m,) receive min(u, INF), max(l, -INF) (NaN bounds pass through to the
+    solver); ``eq`` (m,) holds which rows are equalities (|u - l| < 1e-12), updated in place.
+    """
+    for i in range(q.shape[0]):
+        if not math.isfinite(q[i]):
+            return -1
+    changed = 0
+    for i in range(l.shape[0]):
+        gap = u[i] - l[i]
+        if gap < -1e-9:
+            return -1
+        bu[i] = INF if u[i] > INF else u[i]
+        bl[i] = -INF if l[i] < -INF else l[i]
+        is_eq = abs(gap) < 1e-12
+        if eq[i] != is_eq:
+            eq[i] = is_eq
+            changed = 1
+    return changed
 
 
 def frozen(a: np.ndarray) -> np.ndarray:
@@ -57,7 +86,10 @@ def _same(new: np.ndarray, old: np.ndarray | None) -> bool:
 def _buffer(a: np.ndarray) -> np.ndarray:
     """A C-contiguous writable float array (DAQP's buffers must be writable; copies frozen
     matrices, which it only receives when they change)."""
-    return np.require(a, dtype=float, requirements=("C", "W"))
+    flags = a.flags
+    if flags.c_contiguous and flags.writeable and a.dtype == np.float64:
+        return a  # what the layers' kernels build every tick (np.require costs more)
+    return np.array(a, dtype=float, order="C")
 
 
 class QP(NamedTuple):
@@ -102,7 +134,9 @@ class QpSolver:
         self._A_pattern: _Pattern | None = None
         self._P_obj: np.ndarray | None = None  # the P / A last handed to the solver
         self._A_obj: np.ndarray | None = None
-        self._eq_key: bytes | None = None  # which rows were equalities (DAQP sense)
+        # DAQP's bounds and which rows are equalities, written by _daqp_vectors each solve
+        self._bu = self._bl = np.empty(0)
+        self._eq = np.zeros(0, dtype=np.bool_)
         self.x_prev: np.ndarray | None = None
         self.failures = 0
 
@@ -153,44 +187,48 @@ class QpSolver:
         return np.array(res.x, dtype=float), status
 
     # -- DAQP ------------------------------------------------------------------------------
-    def _solve_daqp(self, qp: QP, gap: np.ndarray) -> tuple[np.ndarray | None, str]:
-        """DAQP on the QP; ``gap`` = u - l (equality rows: |gap| < 1e-12, sense 5)."""
+    def _solve_daqp(self, qp: QP) -> tuple[np.ndarray | None, str]:
+        """DAQP on the QP: the vectors checked and turned into DAQP's bounds by one kernel
+        (equality rows, |u - l| < 1e-12, get DAQP's sense 5), P and A checked only when new."""
         P, q, A, l, u = qp
-        bu = np.minimum(u, INF)
-        bl = np.maximum(l, -INF)
-        eq = np.abs(gap) < 1e-12
-        eq_key = eq.tobytes()
         model = self._daqp
         if model is None or self._shape != A.shape:
+            m = A.shape[0]
+            self._bu, self._bl, self._eq = np.empty(m), np.empty(m), np.zeros(m, dtype=np.bool_)
+            model = None
+        new_P, new_A = not _same(P, self._P_obj), not _same(A, self._A_obj)
+        vectors = _daqp_vectors(q, l, u, self._bu, self._bl, self._eq)
+        if (
+            vectors < 0
+            or (new_P and not math.isfinite(_sum(P, None)))
+            or (new_A and not math.isfinite(_sum(A, None)))
+        ):
+            return None, _INVALID
+        bu, bl = self._bu, self._bl
+        if model is None:
             model = daqp.Model()
             flag, _ = model.setup(
-                _buffer(P),
-                np.ascontiguousarray(q, dtype=float),
-                _buffer(A),
-                bu,
-                bl,
-                eq.astype(np.intc) * 5,
+                _buffer(P), np.ascontiguousarray(q, dtype=float), _buffer(A), bu, bl, self._sense()
             )
             if flag < 0:
                 return None, f"daqp setup flag {flag}"
             self._daqp, self._shape = model, A.shape
-            self._P_obj, self._A_obj, self._eq_key = P, A, eq_key
-        elif _same(P, self._P_obj) and _same(A, self._A_obj) and eq_key == self._eq_key:
+            self._P_obj, self._A_obj = P, A
+        elif not (new_P or new_A or vectors):
             # the usual tick: new vectors only (P and A are the frozen ones already factored)
             flag = model.update(f=q, bupper=bu, blower=bl)
             if flag < 0:
                 return None, f"daqp update flag {flag}"
         else:
             kw: dict[str, np.ndarray] = {}
-            if not _same(P, self._P_obj):
+            if new_P:
                 kw["H"] = _buffer(P)
                 self._P_obj = P
-            if not _same(A, self._A_obj):
+            if new_A:
                 kw["A"] = _buffer(A)
                 self._A_obj = A
-            if eq_key != self._eq_key:  # else keep the working set: the warm start
-                kw["sense"] = eq.astype(np.intc) * 5
-                self._eq_key = eq_key
+            if vectors:  # the equality rows changed; else keep the working set: the warm start
+                kw["sense"] = self._sense()
             flag = model.update(f=q, bupper=bu, blower=bl, **kw)
             if flag < 0:
                 return None, f"daqp update flag {flag}"
@@ -199,24 +237,24 @@ class QpSolver:
             return None, f"daqp exitflag {exitflag}"
         return x, "solved"
 
+    def _sense(self) -> np.ndarray:
+        """DAQP's sense flags of the equality rows (a fresh array: DAQP may keep it)."""
+        return self._eq.astype(np.intc) * _EQUALITY
+
     def solve(self, qp: QP) -> QpResult:
-        """Solve; on failure return the previous solution (or zeros) with ok=False."""
+        """Solve; on failure return the previous solution (or zeros) with ok=False.
+
+        Invalid data fails without calling the solver: a non-finite value in q, P or A
+        (P and A already checked, the same frozen objects as last time, are not checked
+        again) or crossed bounds (l > u beyond 1e-9; NaN bounds are left to the solver).
+        """
         try:
-            # Finite data: a sum is finite iff every term is (barring overflow near 1e308).
-            # P and A already checked (the same frozen objects as last time) are not summed
-            # again. Crossed bounds (l > u beyond 1e-9; NaN bounds are left to the solver).
-            P, q, A, l, u = qp
-            gap = u - l
-            if not (
-                math.isfinite(_sum(q))
-                and (_same(P, self._P_obj) or math.isfinite(_sum(P, None)))
-                and (_same(A, self._A_obj) or math.isfinite(_sum(A, None)))
-            ) or (len(gap) and _fmin(gap) < -1e-9):
-                x, status = None, "infeasible bounds or non-finite data"
-            elif self.backend == "daqp":
-                x, status = self._solve_daqp(qp, gap)
-            else:
+            if self.backend == "daqp":
+                x, status = self._solve_daqp(qp)
+            elif _valid(qp, self._P_obj, self._A_obj):
                 x, status = self._solve_osqp(qp)
+            else:
+                x, status = None, _INVALID
         except Exception as exc:  # a solver error must never crash the control loop
             x, status = None, f"error: {exc}"
         if x is None:
@@ -228,6 +266,19 @@ class QpSolver:
             return QpResult(fallback, False, status)
         self.x_prev = x
         return QpResult(x, True, status)
+
+
+def _valid(qp: QP, P_known: np.ndarray | None, A_known: np.ndarray | None) -> bool:
+    """Finite q, P, A (P and A unchecked when they are the frozen ones already checked;
+    a sum is finite iff every term is, barring overflow near 1e308) and bounds not crossed."""
+    P, q, A, l, u = qp
+    gap = u - l
+    return (
+        math.isfinite(_sum(q))
+        and (_same(P, P_known) or math.isfinite(_sum(P, None)))
+        and (_same(A, A_known) or math.isfinite(_sum(A, None)))
+        and not (len(gap) and _fmin(gap) < -1e-9)
+    )
 
 
 class _Pattern:

@@ -42,14 +42,13 @@ import numpy as np
 from controller.arm_swing import build_arm_qp, solve_arm
 from controller.com_mpc import ComMpc, ComPlan
 from controller.footsteps import (
-    LEFT,
-    RIGHT,
     FootstepPlan,
     PlanSample,
     TickSamples,
     plan_footsteps,
 )
 from controller.ik import build_ik, foot_velocity_command, solve_ik
+from controller.jit import kernel
 from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
 from controller.params import ControllerParams, horizon_samples
 from controller.pelvis_mpc import PelvisMpc, PelvisPlan
@@ -233,15 +232,19 @@ class Walker:
 
         # 4. Pelvis position (eq. 19): measured CoM with the soles at their planned places,
         # each sole's share following the ZMP reference from one foot to the other.
-        feet_now = (plan.p_left[0], plan.p_right[0])
-        p_world_com_meas = self._measured_com(q_meas, feet_now, plan.zmp_ref[0])
+        p_world_com_meas = self._measured_com(
+            q_meas, plan.p_left[0], plan.p_right[0], plan.zmp_ref[0]
+        )
         c3 = clock() if clock else 0.0
-        p_prev = self.p_world_pelvis_des.copy()
-        self.p_world_pelvis_des[:2] += (
-            p_world_com_des - self._last_com_des(p_world_com_des)
-        ) + p.com.pelvis_gain * (p_world_com_des - p_world_com_meas[:2])
-        self.p_world_pelvis_des[2] = self.pelvis_height
-        v_world_pelvis = (self.p_world_pelvis_des - p_prev) / dt
+        v_world_pelvis = _pelvis_step(
+            self.p_world_pelvis_des,
+            p_world_com_des,
+            self._last_com_des(p_world_com_des),
+            p_world_com_meas,
+            p.com.pelvis_gain,
+            self.pelvis_height,
+            dt,
+        )
 
         # 6. Reference pelvic angle over the horizon (eq. 27-33).
         lateral = lateral_distances(
@@ -274,12 +277,14 @@ class Walker:
         ks: KinState = self.kin.compute(self.q_cmd)
         c5 = clock() if clock else 0.0
         # foot targets at the next tick (row 1 of the sample), relative to the pelvis
-        p_des_l = plan.p_left[1] - self.p_world_pelvis_des
-        p_des_r = plan.p_right[1] - self.p_world_pelvis_des
-        v_ff_l = np.zeros(6)  # [linear; angular]: the feet do not turn
-        v_ff_l[:3] = plan.v_left[1] - v_world_pelvis
-        v_ff_r = np.zeros(6)
-        v_ff_r[:3] = plan.v_right[1] - v_world_pelvis
+        p_des_l, p_des_r, v_ff_l, v_ff_r = _foot_targets(
+            plan.p_left[1],
+            plan.v_left[1],
+            plan.p_right[1],
+            plan.v_right[1],
+            self.p_world_pelvis_des,
+            v_world_pelvis,
+        )
         v_des = foot_velocity_command(  # flat feet: desired poses given as positions
             ks.T_pelvis_left_sole,
             p_des_l,
@@ -404,12 +409,12 @@ class Walker:
         return now if prev is None else prev
 
     def _measured_com(
-        self, q_meas: np.ndarray, feet: tuple[np.ndarray, np.ndarray], zmp_ref: np.ndarray
+        self, q_meas: np.ndarray, foot_l: np.ndarray, foot_r: np.ndarray, zmp_ref: np.ndarray
     ) -> np.ndarray:
         """CoM from the measured joints, the base placed so the soles are where planned.
 
-        ``feet`` are the planned left and right soles now. Each sole anchors one estimate (the
-        base placed by a sole is ``sole - p_pelvis_sole``: what
+        ``foot_l``, ``foot_r`` are the planned left and right soles now. Each sole anchors one
+        estimate (the base placed by a sole is ``sole - p_pelvis_sole``: what
         :meth:`RobotKinematics.support_anchored_base` + :meth:`RobotKinematics.com_world`
         compute in two passes); they are blended by :func:`support_share`, which follows the
         ZMP reference: the support sole alone in single support, a continuous hand-over in the
@@ -419,10 +424,7 @@ class Walker:
         few ticks, which threw the centre of pressure to the support foot's outer edge.
         """
         p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)
-        w_left = support_share(feet[LEFT], feet[RIGHT], zmp_ref)
-        com_l = (feet[LEFT] - p_pelvis_soles[LEFT]) + p_pelvis_com
-        com_r = (feet[RIGHT] - p_pelvis_soles[RIGHT]) + p_pelvis_com
-        return w_left * com_l + (1.0 - w_left) * com_r
+        return _anchored_com(p_pelvis_com, p_pelvis_soles, foot_l, foot_r, zmp_ref)
 
     def snapshot_params(self) -> ControllerParams:
         """The parameters in force (pending ones included)."""
@@ -433,10 +435,43 @@ class Walker:
         self.set_params(self.snapshot_params().replace(**groups))
 
 
-def support_share(p_left: np.ndarray, p_right: np.ndarray, zmp_ref: np.ndarray) -> float:
+@kernel
+def support_share(p_left, p_right, zmp_ref):
     """The left sole's share in [0, 1] of the weight: where the ZMP reference lies on the line
     from the right sole (0) to the left (1). 1 or 0 in single support (the reference sits on
     the support foot), a linear hand-over in the double support, 0.5 standing between the feet.
     """
     d = p_left[:2] - p_right[:2]
-    return float(np.clip((zmp_ref[:2] - p_right[:2]) @ d / (d @ d), 0.0, 1.0))
+    share = (zmp_ref[:2] - p_right[:2]) @ d / (d @ d)
+    return min(max(share, 0.0), 1.0)
+
+
+@kernel
+def _anchored_com(p_pelvis_com, p_pelvis_soles, foot_l, foot_r, zmp_ref):
+    """(3,) the CoM anchored at each planned sole, blended by :func:`support_share`."""
+    w_left = support_share(foot_l, foot_r, zmp_ref)
+    com_l = (foot_l - p_pelvis_soles[0]) + p_pelvis_com
+    com_r = (foot_r - p_pelvis_soles[1]) + p_pelvis_com
+    return w_left * com_l + (1.0 - w_left) * com_r
+
+
+@kernel
+def _pelvis_step(pelvis, com_des, com_des_prev, com_meas, gain, height, dt):
+    """Eq. (19) with its feed-forward, in place on ``pelvis`` (3,):
+    X_pel += (X_c^d - X_c^d,prev) + K_p (X_c^d - X_c^m) in x, y; z at ``height``.
+    Returns the pelvis velocity (3,) over the tick."""
+    prev = pelvis.copy()
+    pelvis[:2] += (com_des - com_des_prev) + gain * (com_des - com_meas[:2])
+    pelvis[2] = height
+    return (pelvis - prev) / dt
+
+
+@kernel
+def _foot_targets(p_left, v_left, p_right, v_right, pelvis, v_pelvis):
+    """The feet's targets relative to the pelvis: positions (3,) and feed-forward twists (6,)
+    [linear; angular] (the feet do not turn), left and right."""
+    v_ff_l = np.zeros(6)
+    v_ff_l[:3] = v_left - v_pelvis
+    v_ff_r = np.zeros(6)
+    v_ff_r[:3] = v_right - v_pelvis
+    return p_left - pelvis, p_right - pelvis, v_ff_l, v_ff_r

@@ -46,9 +46,10 @@ class RunConfig:
     settle_time: float = 0.3  # [s] after a fall before a headless run stops
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # not frozen: a frozen init costs a setattr call per field
 class Measurement:
-    """What one control period measured, at its end (world frame, SI units)."""
+    """What one control period measured, at its end (world frame, SI units). Read-only by
+    contract."""
 
     t: float  # [s] time after the period
     waist_angle: float  # [rad] measured waist yaw at the start of the tick

@@ -29,6 +29,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
+from controller.jit import kernel
 from models.dyros_jet import (
     ARM_JOINTS,
     FOOT_GEOMS,
@@ -42,13 +43,15 @@ from models.dyros_jet import (
 )
 
 JOINTS = LOWER_JOINTS + ARM_JOINTS
+LEFT_FOOT, RIGHT_FOOT = 0, 1  # the order of FOOT_GEOMS and FOOT_SITES
 # torso tilt beyond this is a fall (docs/DESIGN.md, "What counts as a fall")
 MAX_TILT_RAD = np.deg2rad(30.0)
 
 
-@dataclass(frozen=True)
+@dataclass(slots=True)  # not frozen: a frozen init costs a setattr call per field
 class Contacts:
-    """Foot contact state from the measured contact forces (world frame)."""
+    """Foot contact state from the measured contact forces (world frame). Read-only by
+    contract."""
 
     in_contact: np.ndarray  # (2,) bool: left / right foot touches the floor
     normal_force: np.ndarray  # (2,) [N]
@@ -83,6 +86,9 @@ class World:
         self._pyramidal = int(m.opt.cone) == int(mujoco.mjtCone.mjCONE_PYRAMIDAL)
         self._geom_body = m.geom_bodyid.tolist()  # geom -> body
         self._foot_side = {int(g): side for side, g in enumerate(self.foot_geom_ids)}
+        self._geom_body_arr = m.geom_bodyid.astype(np.intp)  # the contact kernel's tables
+        self._geom_foot_side = np.full(m.ngeom, -1, dtype=np.intp)  # geom -> foot side or -1
+        self._geom_foot_side[self.foot_geom_ids] = (LEFT_FOOT, RIGHT_FOOT)
         # Contiguous index ranges as slices (cheaper than fancy indexing every substep).
         self._act_sel = _as_slice(self.act_idx)
         self._qpos_sel = _as_slice(self.qpos_idx)
@@ -90,7 +96,6 @@ class World:
         n = len(JOINTS)
         self._tau_buf = np.empty((self.n_substeps, n))  # [N m] per substep
         self._qd_buf = np.empty((self.n_substeps, n))  # [rad/s] per substep
-        self._energy_buf = np.empty((self.n_substeps + 1, n))  # running sum, see step()
         # Views of MjData's own buffers (MuJoCo never moves them), read after every substep
         # (a fresh view per read costs more than the copy). The model lists the joints and
         # their actuators in one contiguous order (models/dyros_jet/robot.xml).
@@ -189,68 +194,40 @@ class World:
                     d.xfrc_applied[self.root_id, :3] = 0.0
             tau[i] = force_now
             qd[i] = qvel_now
-        # Positive work per substep, added substep by substep: row 0 holds the total so far
-        # and the cumulative sum adds the rows in order.
-        e = self._energy_buf
-        e[0] = self.energy_substep_per_joint
-        np.maximum(tau * qd * self.sim_dt, 0.0, out=e[1:])
-        self.energy_substep_per_joint[:] = np.add.accumulate(e, axis=0)[-1]
-        self.work_net += float(np.einsum("ij,ij->", tau, qd)) * self.sim_dt
-        self.work_net_ctrl += float(tau[-1] @ qd[-1]) * self.control_dt
-        # One sample per control period (the state at the tick), as a robot logs it.
-        self.energy_ctrl_per_joint += np.maximum(tau[-1] * qd[-1] * self.control_dt, 0.0)
-        self.saturated_substeps += int(
-            np.count_nonzero((np.abs(tau) >= self._sat_limit).any(axis=1))
+        work, work_ctrl, saturated = _period_energy(
+            tau,
+            qd,
+            self.sim_dt,
+            self.control_dt,
+            self._sat_limit,
+            self.energy_substep_per_joint,
+            self.energy_ctrl_per_joint,
         )
+        self.work_net += work
+        self.work_net_ctrl += work_ctrl
+        self.saturated_substeps += saturated
 
     # -- contacts ----------------------------------------------------------------------------
     def contacts(self) -> Contacts:
         """Foot contact forces, their centre of pressure, and non-foot floor contacts."""
-        m, d = self.model, self.data
-        in_contact = [False, False]
-        fz = [0.0, 0.0]  # [N]
-        mx = my = total = 0.0  # moment of the vertical forces about the origin, their sum
-        other = False
-        ncon = d.ncon
-        if ncon:
-            # The contact arrays as Python lists once: a few contacts, scalar arithmetic.
-            con = d.contact
-            g1, g2 = con.geom1.tolist(), con.geom2.tolist()
-            frames, pos = con.frame.tolist(), con.pos.tolist()
-            dims, adrs, mus = con.dim.tolist(), con.efc_address.tolist(), con.friction.tolist()
-            body, floor, foot_side = self._geom_body, self.floor_body, self._foot_side
-            efc = d.efc_force
-            for i in range(ncon):
-                if body[g1[i]] == floor:
-                    robot = g2[i]
-                elif body[g2[i]] == floor:
-                    robot = g1[i]
-                else:
-                    continue
-                side = foot_side.get(robot)
-                if side is None:
-                    other = True
-                    continue
-                adr = adrs[i]
-                if self._pyramidal and dims[i] == 3 and adr >= 0:
-                    # mj_contactForce for a pyramidal cone: normal = sum of the 4 edge forces,
-                    # tangent j = (edge 2j - edge 2j+1) * friction j
-                    p0, p1, p2, p3 = efc[adr : adr + 4].tolist()
-                    fn = ((p0 + p1) + p2) + p3
-                    f1 = (p0 - p1) * mus[i][0]
-                    f2 = (p2 - p3) * mus[i][1]
-                else:
-                    mujoco.mj_contactForce(m, d, i, self._force6)
-                    fn, f1, f2 = self._force6[:3].tolist()
-                fr = frames[i]  # rows: normal, tangent 1, tangent 2
-                f_up = abs(fr[2] * fn + fr[5] * f1 + fr[8] * f2)  # (frame.T @ f)[2] [N]
-                in_contact[side] = True
-                fz[side] += f_up
-                mx += f_up * pos[i][0]
-                my += f_up * pos[i][1]
-                total += f_up
-        cop = np.array([mx / total, my / total]) if total > 1e-6 else None
-        return Contacts(np.array(in_contact), np.array(fz), cop, other)
+        d = self.data
+        if not d.ncon:
+            return Contacts(np.zeros(2, dtype=bool), np.zeros(2), None, False)
+        con = d.contact
+        in_contact, fz, cop, other = _foot_contacts(
+            con.geom,
+            con.frame,
+            con.pos,
+            con.dim,
+            con.efc_address,
+            con.friction,
+            d.efc_force,
+            self._geom_body_arr,
+            self._geom_foot_side,
+            self.floor_body,
+            self._pyramidal,
+        )
+        return Contacts(in_contact, fz, cop if cop[0] == cop[0] else None, other)
 
     def other_contact(self) -> bool:
         """A body other than the feet touches the floor (what :meth:`contacts` reports as
@@ -273,23 +250,15 @@ class World:
 
     def support_polygon(self, in_contact: np.ndarray) -> np.ndarray:
         """(M, 2) convex hull (counter-clockwise) of the soles in contact."""
-        pts = []
         d = self.data
-        hx, hy = FOOT_SIZE[0] / 2, FOOT_SIZE[1] / 2
-        corners = ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy))
-        for side in range(2):
-            if in_contact[side]:
-                site = int(self.sole_site_ids[side])
-                px, py = d.site_xpos[site, :2].tolist()
-                mat = d.site_xmat[site]
-                yaw = math.atan2(mat[3], mat[0])  # (1, 0) and (0, 0) of the 3x3
-                c, s = math.cos(yaw), math.sin(yaw)
-                pts += [(x * c - y * s + px, x * s + y * c + py) for x, y in corners]
-        if not pts:
-            return np.zeros((0, 2))
-        if len(pts) == 4:  # one foot: its rectangle is already convex and counter-clockwise
-            return np.array(pts)
-        return convex_hull(np.array(pts))
+        return _support_polygon(
+            d.site_xpos,
+            d.site_xmat,
+            self.sole_site_ids,
+            np.asarray(in_contact, dtype=np.bool_),
+            FOOT_SIZE[0] / 2,
+            FOOT_SIZE[1] / 2,
+        )
 
     def fall_reason(self) -> str | None:
         """Why the robot counts as fallen (docs/DESIGN.md, "What counts as a fall"), or None."""
@@ -300,26 +269,144 @@ class World:
         return None
 
 
-def convex_hull(points: np.ndarray) -> np.ndarray:
-    """Andrew's monotone chain; returns the hull counter-clockwise, (M, 2)."""
-    pts = sorted(map(tuple, np.round(points, 12).tolist()))
-    if len(pts) <= 2:
-        return np.array(pts)
+@kernel
+def _period_energy(tau, qd, sim_dt, control_dt, sat_limit, energy_substep, energy_ctrl):
+    """One control period's energy bookkeeping from its substeps' servo torques ``tau`` and
+    joint rates ``qd`` (substeps, joints), in place on the per-joint totals (eq. 44):
+    ``energy_substep`` += the positive work of every substep, added substep by substep;
+    ``energy_ctrl`` += the positive part of the last substep's power x control_dt (one sample
+    per period, as a robot logs it). Returns the net work of the substeps and of the sample
+    [J], and the substeps with a servo at 99 % of its force limit."""
+    n_sub, n_joints = tau.shape
+    for j in range(n_joints):
+        total = energy_substep[j]
+        for i in range(n_sub):
+            w = tau[i, j] * qd[i, j] * sim_dt
+            total += 0.0 if w < 0.0 else w  # max(w, 0), NaN kept
+        energy_substep[j] = total
+        w = tau[n_sub - 1, j] * qd[n_sub - 1, j] * control_dt
+        energy_ctrl[j] += 0.0 if w < 0.0 else w
+    net = 0.0
+    for i in range(n_sub):
+        for j in range(n_joints):
+            net += tau[i, j] * qd[i, j]
+    saturated = 0
+    for i in range(n_sub):
+        for j in range(n_joints):
+            if abs(tau[i, j]) >= sat_limit[j]:
+                saturated += 1
+                break
+    return net * sim_dt, np.dot(tau[n_sub - 1], qd[n_sub - 1]) * control_dt, saturated
 
-    def cross(o, a, b):
-        return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
 
-    lower: list = []
-    for p in pts:
-        while len(lower) >= 2 and cross(lower[-2], lower[-1], p) <= 0:
-            lower.pop()
-        lower.append(p)
-    upper: list = []
-    for p in reversed(pts):
-        while len(upper) >= 2 and cross(upper[-2], upper[-1], p) <= 0:
-            upper.pop()
-        upper.append(p)
-    return np.array(lower[:-1] + upper[:-1])
+@kernel
+def _foot_contacts(
+    geom, frame, pos, dim, efc_address, friction, efc_force, geom_body, foot_side, floor, pyramidal
+):
+    """The feet's contacts with the floor from MjData's contact arrays (one row per contact):
+    (in contact (2,), vertical force (2,) [N], centre of pressure (2,) [m] (NaN when no force),
+    a body other than the feet touches the floor).
+
+    A contact's force in its frame [normal, tangent 1, tangent 2] as ``mj_contactForce``
+    decodes it: a pyramidal cone's normal force is the sum of its 2 (dim - 1) edge forces and
+    tangent j is (edge 2j - edge 2j+1) friction j; an elliptic cone's are the constraint
+    forces themselves; a contact outside the constraints (address -1) carries none. Its
+    vertical component is (frame' f)_z; the CoP is the mean contact point weighted by it."""
+    in_contact = np.zeros(2, dtype=np.bool_)
+    fz = np.zeros(2)
+    mx = my = total = 0.0  # moment of the vertical forces about the origin, their sum
+    other = False
+    for i in range(geom.shape[0]):
+        if geom_body[geom[i, 0]] == floor:
+            robot = geom[i, 1]
+        elif geom_body[geom[i, 1]] == floor:
+            robot = geom[i, 0]
+        else:
+            continue
+        side = foot_side[robot]
+        if side < 0:
+            other = True
+            continue
+        adr, n = efc_address[i], dim[i]
+        fn = f1 = f2 = 0.0
+        if adr >= 0:
+            if n == 1:
+                fn = efc_force[adr]
+            elif pyramidal:
+                fn = efc_force[adr] + efc_force[adr + 1]
+                for k in range(2, 2 * (n - 1)):
+                    fn += efc_force[adr + k]
+                f1 = (efc_force[adr] - efc_force[adr + 1]) * friction[i, 0]
+                f2 = (efc_force[adr + 2] - efc_force[adr + 3]) * friction[i, 1]
+            else:
+                fn, f1, f2 = efc_force[adr], efc_force[adr + 1], efc_force[adr + 2]
+        f_up = abs(frame[i, 2] * fn + frame[i, 5] * f1 + frame[i, 8] * f2)  # (frame' f)_z
+        in_contact[side] = True
+        fz[side] += f_up
+        mx += f_up * pos[i, 0]
+        my += f_up * pos[i, 1]
+        total += f_up
+    cop = np.full(2, np.nan)
+    if total > 1e-6:
+        cop[0] = mx / total
+        cop[1] = my / total
+    return in_contact, fz, cop, other
+
+
+@kernel
+def _support_polygon(site_xpos, site_xmat, sole_ids, in_contact, hx, hy):
+    """(M, 2) the soles in contact as rectangles (half sizes hx, hy, yawed as their sites),
+    their convex hull when both are down (counter-clockwise)."""
+    pts = np.empty((8, 2))
+    m = 0
+    for side in range(2):
+        if in_contact[side]:
+            site = sole_ids[side]
+            px, py = site_xpos[site, 0], site_xpos[site, 1]
+            yaw = math.atan2(site_xmat[site, 3], site_xmat[site, 0])  # (1, 0), (0, 0)
+            c, s = math.cos(yaw), math.sin(yaw)
+            for x, y in ((hx, hy), (-hx, hy), (-hx, -hy), (hx, -hy)):
+                pts[m, 0] = x * c - y * s + px
+                pts[m, 1] = x * s + y * c + py
+                m += 1
+    if m == 8:
+        return convex_hull(pts)
+    return pts[:m].copy()  # none, or one foot: its rectangle is convex and counter-clockwise
+
+
+@kernel
+def convex_hull(points):
+    """Andrew's monotone chain over points (n, 2) rounded to 1e-12 m; returns the hull
+    counter-clockwise, (M, 2)."""
+    n = points.shape[0]
+    pts = np.round(points, 12)
+    # sort by x, then y (insertion sort: a handful of points)
+    for i in range(1, n):
+        x, y = pts[i, 0], pts[i, 1]
+        j = i - 1
+        while j >= 0 and (pts[j, 0] > x or (pts[j, 0] == x and pts[j, 1] > y)):
+            pts[j + 1] = pts[j]
+            j -= 1
+        pts[j + 1, 0], pts[j + 1, 1] = x, y
+    if n <= 2:
+        return pts
+    hull = np.empty((2 * n, 2))
+    k = 0
+    for start, stop, step in ((0, n, 1), (n - 1, -1, -1)):  # lower, then upper chain
+        base = k
+        for i in range(start, stop, step):
+            while k - base >= 2 and _cross(hull[k - 2], hull[k - 1], pts[i]) <= 0.0:
+                k -= 1
+            hull[k] = pts[i]
+            k += 1
+        k -= 1  # each chain's last point starts the other
+    return hull[:k].copy()
+
+
+@kernel
+def _cross(o, a, b):
+    """z of (a - o) x (b - o): > 0 when o, a, b turn counter-clockwise."""
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
 
 
 def point_in_polygon(p: np.ndarray, hull: np.ndarray, tol: float = 1e-3) -> bool:
@@ -343,14 +430,23 @@ def polygon_test(p: np.ndarray, hull: np.ndarray, tol: float = 1e-3) -> tuple[bo
     Inside: p is within ``tol`` of the left of every edge (a degenerate, zero-length edge
     makes it not inside). The margin skips degenerate edges.
     """
-    if len(hull) < 3:
+    return _polygon_test(
+        float(p[0]), float(p[1]), np.asarray(hull, dtype=float).reshape(-1, 2), float(tol)
+    )
+
+
+@kernel
+def _polygon_test(px, py, pts, tol):
+    """:func:`polygon_test` of the point (px, py) and the polygon (M, 2)."""
+    n = pts.shape[0]
+    if n < 3:
         return False, -math.inf
-    px, py = float(p[0]), float(p[1])
-    pts = np.asarray(hull, dtype=float).tolist()
     inside = True
     margin = math.inf
     outside = 0.0
-    for (ax, ay), (bx, by) in zip(pts, pts[1:] + pts[:1], strict=True):
+    for i in range(n):
+        ax, ay = pts[i, 0], pts[i, 1]
+        bx, by = pts[(i + 1) % n, 0], pts[(i + 1) % n, 1]
         ex, ey = bx - ax, by - ay
         cross = ex * (py - ay) - ey * (px - ax)  # > 0 left of the edge: inside
         length = math.sqrt(ex * ex + ey * ey)
