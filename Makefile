@@ -22,7 +22,15 @@ $(TEST_STAMP): $(STAMP)
 	$(BIN)/pip install -q -e '.[test,cluster]'
 	@touch $@
 
-run: $(STAMP)
+# numba compiles the control tick's kernels (controller/jit.py) at their first call and keeps
+# them in __pycache__: one short walk compiles them once (about 15 s of CPU) rather than every
+# test or worker process that happens to start first; a changed kernel module compiles again.
+KERNELS := $(VENV)/.kernels
+$(KERNELS): $(STAMP) $(wildcard controller/*.py) app/sim/world.py
+	$(BIN)/pelvic-walk simulate --method mpc --step-length 0.2 --steps 1 > /dev/null
+	@touch $@
+
+run: $(STAMP) $(KERNELS)
 	$(BIN)/pelvic-walk serve --host 127.0.0.1 --port 8000
 
 # Debian's chromium for the browser test: installed if missing and we are root.
@@ -37,12 +45,12 @@ chromium:
 # Two processes (pytest-xdist), one test file each, the browser files together (one Chromium
 # at a time, tests/conftest.py): many tests wait on real-time walks and servers, so two
 # share this 2-core machine's time well.
-test: $(TEST_STAMP) chromium
+test: $(TEST_STAMP) $(KERNELS) chromium
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup
 
 # The quick inner loop: unit, API and headless tests; no browser, no study, no wheel build,
 # no load test, no mypy (tests/conftest.py marks them). make test still runs everything.
-check: $(TEST_STAMP)
+check: $(TEST_STAMP) $(KERNELS)
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not browser and not slow"
 
 # Style, types and structure: ruff's rules and formatting everywhere, mypy on app and
