@@ -310,7 +310,6 @@ class Walker:
         if not ik_ok:
             q_dot_low = np.zeros(13)  # fall back: hold the last command
         self._last_waist_rate = float(q_dot_low[0])
-        speed_limited = bool(np.abs(q_dot_low).max() >= p.ik.joint_speed_limit * 0.999)
         c6 = clock() if clock else 0.0
 
         # 9. Arm swing (eq. 41-43) with the lower-body velocities just computed.
@@ -337,10 +336,9 @@ class Walker:
         c7 = clock() if clock else 0.0
 
         # 10. Joint targets (eq. 40).
-        q_dot = np.zeros(self.q_cmd.shape[0])
-        q_dot[:13] = q_dot_low
-        q_dot[arms] = q_dot_up
-        self.q_cmd = self.q_cmd + dt * q_dot
+        q_dot, self.q_cmd, speed_limited = _joint_targets(
+            self.q_cmd, q_dot_low, q_dot_up, arms, dt, p.ik.joint_speed_limit
+        )
         failures = {
             "com_mpc": not com_plan.ok,
             "pelvis_mpc": pelvis_plan is not None and not pelvis_plan.ok,
@@ -373,7 +371,7 @@ class Walker:
             in_ssp=bool(plan.in_ssp[0]),
             swing_side=int(plan.swing_side[0]),
             failures=failures,
-            speed_limited=speed_limited,
+            speed_limited=bool(speed_limited),
             layer_s=(
                 {
                     "plan": c1 - c0,
@@ -475,3 +473,15 @@ def _foot_targets(p_left, v_left, p_right, v_right, pelvis, v_pelvis):
     v_ff_r = np.zeros(6)
     v_ff_r[:3] = v_right - v_pelvis
     return p_left - pelvis, p_right - pelvis, v_ff_l, v_ff_r
+
+
+@kernel
+def _joint_targets(q_cmd, q_dot_low, q_dot_up, arms, dt, speed_limit):
+    """Eq. (40): the joint velocities (n,) (the lower joints first, the arms' at ``arms``), the
+    new commanded joints q + dt q_dot (a new array: q_cmd is replaced, never written), and
+    whether a lower joint's velocity sits at the speed limit."""
+    q_dot = np.zeros(q_cmd.shape[0])
+    q_dot[: q_dot_low.shape[0]] = q_dot_low
+    for i in range(arms.shape[0]):
+        q_dot[arms[i]] = q_dot_up[i]
+    return q_dot, q_cmd + dt * q_dot, np.abs(q_dot_low).max() >= speed_limit * 0.999

@@ -9,6 +9,7 @@ from controller.kinematics import (
     KinState,
     RobotKinematics,
     condition_number,
+    extreme_eigenvalues,
     jacobian_conditions,
     leg_reach,
 )
@@ -250,3 +251,20 @@ def test_jacobian_conditions_match_the_svd_and_see_one_straight_knee(kin):
     qj[4] = 0.0  # left knee straight, the leg tilted as in a step (hip pitch -0.42 rad)
     low, legs = jacobian_conditions(kin.compute(qj).J_low)
     assert legs > 1e6 and low < 1e3
+
+
+def test_extreme_eigenvalues_match_lapack():
+    """The compiled eigenvalue kernel behind kappa: the smallest and largest eigenvalue of
+    symmetric matrices (definite, indefinite, rank-deficient, repeated, diagonal) as LAPACK."""
+    rng = np.random.default_rng(7)
+    cases = [np.zeros((3, 3)), 2.0 * np.eye(4), np.array([[5.0]]), np.diag([1.0, 1.0, 3.0])]
+    for _ in range(300):
+        n = int(rng.integers(2, 14))
+        X = rng.normal(size=(n, n)) * 10 ** rng.uniform(-3, 3)
+        U = rng.normal(size=(n, n - 1))
+        cases += [X @ X.T, X + X.T, U @ U.T]
+    for A in cases:
+        lam = np.linalg.eigvalsh(A)
+        lo, hi = extreme_eigenvalues(A)
+        scale = max(np.abs(lam).max(), 1e-300)
+        assert abs(lo - lam[0]) <= 1e-13 * scale and abs(hi - lam[-1]) <= 1e-13 * scale

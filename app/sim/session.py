@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from app.sim.metrics import COL, Series, two_step_windows
-from app.sim.world import Contacts, World, polygon_test
+from app.sim.world import Contacts, World
 from controller.footsteps import FootstepPlan
 from controller.kinematics import RobotKinematics
 from controller.params import ControllerParams
@@ -28,6 +28,7 @@ from controller.walker import TickOutput, Walker
 from models.dyros_jet import ROBOT_XML
 
 GRAVITY = 9.81  # [m/s^2]
+_sum = np.add.reduce  # ndarray.sum without its Python-level wrapper (the same reduction)
 
 
 @dataclass(frozen=True)
@@ -211,12 +212,7 @@ class Session:
             else (vel - self._com_vel_prev) / world.control_dt
         )
         self._com_vel_prev = vel
-        support = world.support_polygon(contacts.in_contact)
-        if contacts.cop is None:
-            inside, margin, tilt = None, math.nan, math.nan
-        else:
-            inside, margin = polygon_test(contacts.cop, support)
-            tilt = float(np.maximum.reduce(world.sole_tilts()[contacts.in_contact]))
+        support, inside, margin, tilt = world.support(contacts)
         return Measurement(
             t=self.walker.t,
             waist_angle=waist_angle,
@@ -228,8 +224,8 @@ class Session:
             com=com,
             lipm_zmp=com[:2] - (com[2] / GRAVITY) * acc,
             yaw_momentum=yaw_momentum,
-            energy=float(world.energy_ctrl_per_joint.sum()),
-            energy_substep=float(world.energy_substep_per_joint.sum()),
+            energy=float(_sum(world.energy_ctrl_per_joint)),
+            energy_substep=float(_sum(world.energy_substep_per_joint)),
         )
 
     def _record(self, out: TickOutput, m: Measurement, tick_ms: float) -> None:

@@ -260,6 +260,25 @@ class World:
             FOOT_SIZE[1] / 2,
         )
 
+    def support(self, contacts: Contacts) -> tuple[np.ndarray, bool | None, float, float]:
+        """The support polygon of the feet in contact (:meth:`support_polygon`), whether the
+        CoP lies in it and its margin (:func:`polygon_test`), and the largest tilt of a sole
+        in contact [rad] (:meth:`sole_tilts`); None, NaN, NaN without a CoP."""
+        d, cop = self.data, contacts.cop
+        polygon, inside, margin, tilt = _support_and_cop(
+            d.site_xpos,
+            d.site_xmat,
+            self.sole_site_ids,
+            contacts.in_contact,
+            FOOT_SIZE[0] / 2,
+            FOOT_SIZE[1] / 2,
+            math.nan if cop is None else float(cop[0]),
+            math.nan if cop is None else float(cop[1]),
+        )
+        if cop is None:
+            return polygon, None, math.nan, math.nan
+        return polygon, bool(inside), margin, tilt
+
     def fall_reason(self) -> str | None:
         """Why the robot counts as fallen (docs/DESIGN.md, "What counts as a fall"), or None."""
         if self.data.qpos[2] < 0.5 * NOMINAL_PELVIS_HEIGHT:
@@ -372,6 +391,20 @@ def _support_polygon(site_xpos, site_xmat, sole_ids, in_contact, hx, hy):
     if m == 8:
         return convex_hull(pts)
     return pts[:m].copy()  # none, or one foot: its rectangle is convex and counter-clockwise
+
+
+@kernel
+def _support_and_cop(site_xpos, site_xmat, sole_ids, in_contact, hx, hy, cop_x, cop_y):
+    """:meth:`World.support`: the polygon, the CoP's test against it (1 mm tolerance) and the
+    largest sole tilt of a foot in contact, arccos of its z axis's vertical component."""
+    polygon = _support_polygon(site_xpos, site_xmat, sole_ids, in_contact, hx, hy)
+    inside, margin = _polygon_test(cop_x, cop_y, polygon, 1e-3)
+    tilt = -np.inf
+    for side in range(2):
+        if in_contact[side]:
+            zz = site_xmat[sole_ids[side], 8]  # element (2, 2) of the 3x3
+            tilt = max(tilt, np.arccos(min(max(zz, -1.0), 1.0)))
+    return polygon, inside, margin, tilt
 
 
 @kernel
