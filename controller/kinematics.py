@@ -196,15 +196,23 @@ def jacobian_conditions(J_low: np.ndarray) -> tuple[float, float]:
     resolved up to about 1e7, far above the 1e3 that marks a straight knee). With L the leg
     columns and w the waist column, J J' = L L' + w w'.
     """
-    J = np.asarray(J_low, dtype=float)
-    legs = J[:, 1:] @ J[:, 1:].T  # (12, 12), block diagonal: each foot on its own leg
-    w = J[:, 0]
-    return _conditions(legs + w[:, None] * w[None, :], legs, _EPS)
+    return _conditions(np.asarray(J_low, dtype=float), _EPS)
 
 
 @kernel
-def _conditions(full, legs, eps):
-    """(kappa, kappa) from the Gram matrices J J' and L L': sqrt(lambda_max / lambda_min)."""
+def _conditions(J, eps):
+    """(kappa(J), kappa(J's columns 1..)) = sqrt(lambda_max / lambda_min) of their Gram
+    matrices J J' = L L' + w w' and L L' (w: column 0, L: the rest)."""
+    m, n = J.shape
+    legs = np.empty((m, m))
+    full = np.empty((m, m))
+    for i in range(m):
+        for j in range(i + 1):
+            g = 0.0
+            for c in range(1, n):
+                g += J[i, c] * J[j, c]
+            legs[i, j] = legs[j, i] = g
+            full[i, j] = full[j, i] = g + J[i, 0] * J[j, 0]
     out = np.empty(2)
     for k in range(2):
         lam_min, lam_max = extreme_eigenvalues(full if k == 0 else legs)
@@ -217,13 +225,10 @@ def _conditions(full, legs, eps):
 def extreme_eigenvalues(A):
     """(smallest, largest) eigenvalue of the symmetric matrix A (n, n).
 
-    A Householder reduction to a tridiagonal T (Golub & Van Loan, Matrix Computations,
-    8.3.1), then Laguerre's iteration on det(T - x I) from each Gershgorin bound: from outside
-    the spectrum it moves monotonically to the nearest eigenvalue and converges cubically
-    (3-6 steps), and there T - x I is definite, so the recurrence of its LDL' pivots, which
-    gives (log det)' and (log det)'', never divides by zero. As accurate as LAPACK for the
-    extreme eigenvalues (a few eps ||A||) and several times cheaper at 12 x 12, where
-    LAPACK's dsyevd costs its per-call overhead (docs/PERFORMANCE.md).
+    A Householder reduction to a tridiagonal T, then implicit QR steps with the Wilkinson
+    shift (Golub & Van Loan, Matrix Computations, 8.3), LAPACK's algorithm for all the
+    eigenvalues of a small matrix, as accurate (a few eps ||A||) and several times cheaper at
+    12 x 12, where dsyevd's cost is its per-call overhead (docs/PERFORMANCE.md).
     """
     n = A.shape[0]
     T = A.copy()
@@ -260,51 +265,44 @@ def extreme_eigenvalues(A):
             for j in range(lo, n):
                 T[i, j] -= v[i] * p[j] + p[i] * v[j]
         T[lo, k] = alpha
+    # Implicit symmetric QR steps with the Wilkinson shift (Golub & Van Loan, 8.3.2-8.3.3) on
+    # the diagonal d and subdiagonal e (e[i] between rows i and i + 1): each step chases a
+    # Givens rotation G = [[c, s], [-s, c]] down the unreduced block [lo, hi] (T <- G' T G on
+    # rows and columns k, k + 1, the bulge z moving from (k + 1, k - 1) to (k + 2, k)); a
+    # subdiagonal below eps (|d_i| + |d_i+1|) is dropped and splits the problem.
     d = np.empty(n)
-    e2 = np.zeros(n)  # e2[i] = T[i, i - 1]^2
-    bound_lo, bound_hi, scale = np.inf, -np.inf, 0.0
+    e = np.zeros(n)
     for i in range(n):
         d[i] = T[i, i]
-        if i > 0:
-            e2[i] = T[i, i - 1] * T[i, i - 1]
-    for i in range(n):
-        r = (math.sqrt(e2[i]) if i > 0 else 0.0) + (math.sqrt(e2[i + 1]) if i + 1 < n else 0.0)
-        bound_lo = min(bound_lo, d[i] - r)
-        bound_hi = max(bound_hi, d[i] + r)
-        scale = max(scale, abs(d[i]) + r)
-    if n == 1 or scale == 0.0:
-        return bound_lo, bound_hi
+        if i + 1 < n:
+            e[i] = T[i + 1, i]
     eps = np.finfo(np.float64).eps
-    out = np.empty(2)
-    for which in range(2):
-        x = bound_lo if which == 0 else bound_hi
-        for _ in range(60):
-            # the pivots q_i of T - x I and their derivatives in x; G = sum q'/q = (log det)',
-            # H = sum (q'/q)^2 - q''/q = -(log det)''
-            q, dq, ddq = d[0] - x, -1.0, 0.0
-            g = h = 0.0
-            for i in range(n):
-                if i > 0:
-                    r = e2[i] / q
-                    ddq = r * (ddq - 2.0 * dq * dq / q) / q
-                    dq = -1.0 + r * dq / q
-                    q = d[i] - x - r
-                if q == 0.0:  # det(T - x I) = 0 beyond the rest of the spectrum: x is it
-                    break
-                g += dq / q
-                h += (dq / q) * (dq / q) - ddq / q
-            if q == 0.0:
-                break
-            root = math.sqrt(max((n - 1) * (n * h - g * g), 0.0))
-            denom = g + root if g >= 0.0 else g - root
-            if not denom != 0.0:  # zero or NaN: no step left
-                break
-            step = n / denom  # Laguerre: x - n / (G +- sqrt((n - 1)(n H - G^2)))
-            x -= step
-            if abs(step) <= 4.0 * eps * abs(x) + 1e-3 * eps * scale:
-                break
-        out[which] = x
-    return out[0], out[1]
+    hi = n - 1
+    for _ in range(30 * n):
+        while hi > 0 and abs(e[hi - 1]) <= eps * (abs(d[hi - 1]) + abs(d[hi])):
+            hi -= 1
+        if hi == 0:
+            break
+        lo = hi - 1
+        while lo > 0 and abs(e[lo - 1]) > eps * (abs(d[lo - 1]) + abs(d[lo])):
+            lo -= 1
+        half = 0.5 * (d[hi - 1] - d[hi])
+        b = e[hi - 1]
+        mu = d[hi] - b * b / (half + math.copysign(math.sqrt(half * half + b * b), half))
+        x, z = d[lo] - mu, e[lo]
+        for k in range(lo, hi):
+            r = math.sqrt(x * x + z * z)
+            c, sn = (x / r, -z / r) if r > 0.0 else (1.0, 0.0)  # G' [x; z] = [r; 0]
+            if k > lo:
+                e[k - 1] = r
+            a0, a1, bk = d[k], d[k + 1], e[k]
+            d[k] = c * c * a0 - 2.0 * c * sn * bk + sn * sn * a1
+            d[k + 1] = sn * sn * a0 + 2.0 * c * sn * bk + c * c * a1
+            e[k] = c * sn * (a0 - a1) + (c * c - sn * sn) * bk
+            if k + 1 < hi:
+                x, z = e[k], -sn * e[k + 1]
+                e[k + 1] *= c
+    return d.min(), d.max()
 
 
 def _kappa(s_max: float, s_min: float, floor: float = _EPS) -> float:

@@ -183,11 +183,11 @@ class World:
     def step(self, q_target: np.ndarray) -> None:
         """Hold ``q_target`` on the servos for one control period (n_substeps MuJoCo steps)."""
         m, d = self.model, self.data
-        d.ctrl[self.act_idx] = q_target
+        d.ctrl[self._act_sel] = q_target
         tau, qd = self._tau_buf, self._qd_buf
-        force_now, qvel_now = self._force_view, self._qvel_view
+        force_now, qvel_now, mj_step = self._force_view, self._qvel_view, mujoco.mj_step
         for i in range(self.n_substeps):
-            mujoco.mj_step(m, d)
+            mj_step(m, d)
             if self._push_left:  # the push acted on this substep; it ends after the last one
                 self._push_left -= 1
                 if not self._push_left:
