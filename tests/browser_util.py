@@ -341,11 +341,21 @@ class CameraReports:
     poses: list[tuple[np.ndarray, np.ndarray]] = field(default_factory=list)
 
     def at(self, position, up, tol: float = 0.05) -> bool:
-        """Whether the browser reported this pose since the last :meth:`clear`."""
+        """Whether the browser reported this pose since the last :meth:`clear`, or its camera
+        stands there now (a view set again where the camera already was moves nothing, so the
+        browser reports nothing new: a lesson's button pressed twice)."""
         return any(
             np.allclose(p, position, atol=tol) and np.allclose(u, up, atol=1e-3)
-            for p, u in list(self.poses)
+            for p, u in [*list(self.poses), self.now()]
         )
+
+    def now(self) -> tuple[np.ndarray, np.ndarray]:
+        """(position, up) the browser reported last (NaN before its first report)."""
+        try:
+            cam = self.client.camera
+            return np.array(cam.position), np.array(cam.up_direction)
+        except AssertionError:  # viser: nothing reported yet
+            return np.full(3, np.nan), np.full(3, np.nan)
 
     def clear(self) -> None:
         self.poses.clear()

@@ -93,7 +93,14 @@ def test_a_lesson_sets_params_view_and_shows_live_numbers(learn_page, i):
     pos, _look, up, _fov = camera_pose(
         lesson.view, n, cams.client.camera.aspect, lesson.view == "side"
     )
-    wait_until(lambda: cams.at(pos, up), f"{lesson.title}: the browser camera at {lesson.view}")
+    if not wait_for(lambda: cams.at(pos, up), 90.0):
+        scene_view = tool.display.views[None].scene
+        pytest.fail(
+            f"waited 90 s for {lesson.title}: the browser camera at {lesson.view} {pos.round(3)};"
+            f" it reported {[p.round(3).tolist() for p, _u in cams.poses[-3:]]}, stands at"
+            f" {cams.now()[0].round(3).tolist()}; the scene's view {scene_view.camera_view!r},"
+            f" a view still to set {learn._camera!r}, the lesson's start clock {learn.start_clock}"
+        )
     assert learn.lesson is lesson
 
     # the lesson's text and its live numbers, read from the robots, moving on

@@ -36,13 +36,13 @@ def test_a_short_load_reports_real_time_bytes_and_memory():
 
 def test_in_private_mode_each_viewer_opens_a_session_or_is_told_they_are_full():
     """The viewers report a camera as browsers do, so a private-mode server gives each its own
-    session while the worker has room (3 robots: the shared demo's 1 and one private pair)
-    and tells the rest; every viewer gets a scene either way."""
+    session while the worker has room (4 robots: the shared demo's 1 and the 3 a private session
+    opens with) and tells the rest; every viewer gets a scene either way."""
     r = run_loadtest(
         viewers=3,
         robots=1,
         seconds=5,
-        serve_args=["--sessions", "private", "--workers", "1", "--robots-per-worker", "3"],
+        serve_args=["--sessions", "private", "--workers", "1", "--robots-per-worker", "4"],
     )
     refused = r["health"]["viewers_refused"]
     assert r["private_sessions_max"] >= 1 and refused >= 1
