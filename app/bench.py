@@ -22,9 +22,10 @@ Everything comes from one invocation, on one robot, headless:
    DAQP solve of the same QP (an exact active-set solution: its KKT system is solved directly).
 4. **Peer** (``peer``): placo's walk loop (its walk pattern generator and whole-body
    kinematics QP, no physics) on our robot, in the same run, with our step timing and length
-   (``app/bench_peer.py``, in an interpreter that has placo: ``--peer-python`` or
-   ``$PELVIC_WALK_PEER_PYTHON``; placo pins Pinocchio 3.8, so it lives in its own venv). The
-   URDF it loads is written from our MJCF at run time (:func:`urdf_from_mjcf`). Without placo
+   (``app/bench_peer.py``, in an interpreter that has placo: ``--peer-python``,
+   ``$PELVIC_WALK_PEER_PYTHON`` or the checkout's ``.venv-peers`` of ``make peers``; placo
+   pins Pinocchio 3.8, so it lives in its own venv). The URDF it loads is written from our
+   MJCF at run time (:func:`urdf_from_mjcf`). Without placo
    the bench says so and runs the rest.
 5. **CPU time**: the ``*_cpu`` extras repeat the figures in CPU time of this process
    (``tick_ms_cpu_*`` from a second session), which other jobs on the machine disturb less.
@@ -396,13 +397,17 @@ def urdf_from_mjcf(xml: str | Path) -> str:
 
 
 def peer_python() -> str | None:
-    """The interpreter that runs placo: $PELVIC_WALK_PEER_PYTHON, or this one if it has
-    placo, else None (placo is not installed)."""
+    """The interpreter that runs placo: $PELVIC_WALK_PEER_PYTHON, else the one ``make peers``
+    made in the checkout (``.venv-peers``), else this one if it has placo, else None (placo is
+    not installed)."""
     import importlib.util
 
     env = os.environ.get(PEER_PYTHON_ENV)
     if env:
         return env
+    made = Path(__file__).resolve().parents[1] / ".venv-peers" / "bin" / "python"
+    if made.exists():
+        return str(made)
     return sys.executable if importlib.util.find_spec("placo") is not None else None
 
 
