@@ -490,7 +490,7 @@ def test_with_an_instructor_anyone_reads(taught):
 
 
 def test_the_instructors_page_carries_the_token_to_the_scene(taught):
-    from urllib.parse import parse_qs, unquote, urlsplit
+    from urllib.parse import parse_qs, quote, unquote, urlsplit
 
     page = taught.get(f"/?token={TOKEN}").text
     assert "you drive the shared demo" in page
@@ -499,6 +499,13 @@ def test_the_instructors_page_carries_the_token_to_the_scene(taught):
     assert websocket.startswith("ws://") and parse_qs(urlsplit(unquote(websocket)).query) == {
         "token": [TOKEN]
     }
+    # only the scene's frame carries it: no link on the projected page, and the page takes
+    # it out of its address bar once read
+    rest = page.replace(src, "")
+    assert TOKEN not in rest and quote(TOKEN, safe="") not in rest
+    link = page.split("Scene in its own tab", 1)[0].rsplit('href="', 1)[1].split('"', 1)[0]
+    assert "token" not in link and "websocket" not in link
+    assert 'searchParams.delete("token")' in page and "history.replaceState" in page
 
 
 def test_the_token_is_compared_in_constant_time(monkeypatch):

@@ -82,6 +82,9 @@ def pages_router(
                 role = "wrong" if token else ("student_private" if private else "student")
         page = (static_dir / "index.html").read_text(encoding="utf-8")
         page = page.replace("{{SCENE_URL}}", html.escape(scene_url, quote=True))
+        # the link to open the scene alone never carries the token (a projected page's links
+        # are read by the room): it opens the scene as a viewer
+        page = page.replace("{{SCENE_LINK}}", html.escape(viser_url, quote=True))
         page = page.replace("{{VISER_URL}}", viser_url)
         page = page.replace("{{ROLE}}", ROLES[role])
         page = page.replace("{{FALL_HOLD_S}}", f"{FALL_HOLD_S:g}")
