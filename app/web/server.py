@@ -88,6 +88,31 @@ def _fail(message: str) -> int:
     return 2
 
 
+def private_room_line(workers: int, robots_per_worker: int, robots: int, shared_demo: bool) -> str:
+    """The start-up line of ``--sessions private``: how many private sessions of ``robots``
+    robots the workers hold beside the shared demo (a session takes a slot per robot, the demo
+    holds its own all the time), and what to do when that is none."""
+    slots = workers * robots_per_worker
+    n = max(slots - (robots if shared_demo else 0), 0) // robots
+    line = (
+        f"pelvic-walk: {n} private session{'s' if n != 1 else ''} of {robots} robot"
+        f"{'s' if robots != 1 else ''} {'fits' if n == 1 else 'fit'}"
+        f"{' beside the shared demo' if shared_demo else ''} ({workers} worker(s) x"
+        f" {robots_per_worker} robot(s) = {slots} robot slots"
+        f"{f', {robots} of them for the demo' if shared_demo else ''})"
+    )
+    if n:
+        beyond = "watches the shared demo" if shared_demo else "is told they are full"
+        return f"{line}; a browser beyond that {beyond}"
+    fixes = ["--no-shared-demo (every slot for the students)"] if shared_demo else []
+    fixes.append("more --workers or --robots-per-worker (if the cores keep up: pelvic-walk bench)")
+    if robots > 1:
+        fixes.append("fewer robots per session (--methods mpc)")
+    what = fixes[0] if len(fixes) == 1 else f"{', '.join(fixes[:-1])} or {fixes[-1]}"
+    whom = "every student watches the shared demo" if shared_demo else "no browser gets robots"
+    return f"{line}: {whom}. For private sessions start with {what}."
+
+
 def serve(
     host: str | None = None,
     port: int | None = None,
@@ -187,6 +212,13 @@ def serve(
         f"{'es' if workers != 1 else ''}, {sessions} sessions{demo}{teacher}; Ctrl-C to stop",
         flush=True,
     )
+    if sessions == "private":
+        print(
+            private_room_line(
+                workers, robots_per_worker, len(intent.methods), settings.shared_demo
+            ),
+            flush=True,
+        )
     status = 0
     try:
         server.run()
