@@ -31,3 +31,58 @@ def test_the_start_up_line_says_how_many_private_sessions_fit(
         assert ("--methods mpc" in line) is (robots > 1)
     else:
         assert "For private sessions" not in line
+
+
+def test_falls_count_from_the_last_restart_asked_for():
+    """The status line's "falls N": the session's own restarts after a fall keep counting (a
+    student sees three falls after three), a restart someone asks for (a lesson's) starts at 0."""
+    import dataclasses
+
+    from app.live.loop import LiveLoop
+    from app.live.session import initial_intent
+    from controller.params import ControllerParams
+
+    intent = [
+        dataclasses.replace(
+            initial_intent(ControllerParams().replace(walk={"n_steps": 6}), ["mpc"]),
+            anchor=(0.0, 0.0),
+        )
+    ]
+    frames: list = []
+    wall = [0.0]
+
+    def sleep(s: float) -> None:
+        wall[0] += s
+
+    loop = LiveLoop(lambda: intent[0], frames.append, clock=lambda: wall[0], sleep=sleep)
+
+    def run_to(clock: float):
+        while not frames or frames[-1].clock < clock:
+            loop.iterate()
+        return frames[-1].robots[0]
+
+    def restart(auto: bool) -> None:
+        cur = intent[0]
+        clock = frames[-1].clock + 0.1
+        intent[0] = dataclasses.replace(
+            cur,
+            reset_requests=cur.reset_requests + 1,
+            auto_restarts=cur.auto_restarts + auto,
+            start_clock=clock,
+            version=cur.version + 1,
+        )
+
+    def fall() -> None:
+        loop.robots["mpc"].session.fell = True
+        loop.robots["mpc"].session.fall_reason = "a test's fall"
+
+    run_to(0.5)
+    for n in (1, 2):
+        fall()
+        assert run_to(frames[-1].clock + 0.1).falls == n
+        restart(auto=True)  # the session's own restart after the fall was shown
+        assert run_to(frames[-1].clock + 0.3).falls == n and not frames[-1].robots[0].fell
+    restart(auto=False)  # a lesson or a user restarts the robots
+    assert run_to(frames[-1].clock + 0.3).falls == 0
+    fall()
+    assert run_to(frames[-1].clock + 0.1).falls == 1

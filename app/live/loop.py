@@ -82,7 +82,7 @@ class _Robot:
 
     method: str
     session: Session
-    falls: int = 0  # since the session opened (kept when the robots are rebuilt)
+    falls: int = 0  # since the last restart asked for (kept through the session's own)
     walks_completed: int = 0
     last_walk_success: bool | None = None
     error: str | None = None  # the controller raised: shown down like a fall
@@ -241,7 +241,10 @@ class LiveLoop:
             for m, robot in self.robots.items():  # the counts of the session go on
                 if m in before:
                     old_robot = before[m]
-                    robot.falls, robot.walks_completed = old_robot.falls, old_robot.walks_completed
+                    # falls count from the last restart someone asked for (a lesson's too):
+                    # the session's own restarts after a fall keep counting
+                    robot.falls = 0 if user_reset else old_robot.falls
+                    robot.walks_completed = old_robot.walks_completed
                     robot.last_walk_success = old_robot.last_walk_success
             self._resets_done = intent.reset_requests
             self._user_resets = intent.reset_requests - intent.auto_restarts
