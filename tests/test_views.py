@@ -311,6 +311,7 @@ def test_a_students_panel_is_read_only_and_says_why(panel_view):
         assert READ_ONLY_NOTE in panel.notice.content and panel.notice.visible
         assert panel.writers and all(h.disabled for h in panel.writers)
         assert panel.controls[("walk", "step_length")][0].disabled
+        assert panel.step_row._impl.props.disabled  # the single-step buttons look off too
         assert all(b.disabled for b in panel.learn.buttons)
         assert not any(b.disabled for b in panel.layer_boxes.values())
         assert not panel.record.button.disabled

@@ -51,6 +51,11 @@ READ_ONLY_NOTE = (
     "here; the camera, layers, plots, inspector and recording are yours."
 )
 REFUSED = "**Not applied:** the instructor drives this demo (your controls are read-only)."
+DISABLED_SLIDER_STYLE = (
+    "<style>.mantine-Slider-root[data-disabled] ~ .mantine-NumberInput-root,"
+    ".mantine-Slider-root[data-disabled] ~ * .mantine-NumberInput-input"
+    "{opacity:.45;pointer-events:none}</style>"
+)
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
 PUSH_DIRECTIONS = {
     "left (+y)": (0.0, 1.0),
@@ -102,6 +107,9 @@ class ControlPanel:
         notice = "  \n".join(
             x for x in (view.notice, READ_ONLY_NOTE if self.read_only else None) if x
         )
+        # viser greys a disabled slider but not the number box beside it, which then looks
+        # as if typing in it would act: grey that box too and let it take no clicks
+        gui.add_html(DISABLED_SLIDER_STYLE)
         self.notice = gui.add_markdown(notice)
         self.notice.visible = bool(notice)
         self.status = gui.add_markdown("starting...")
@@ -144,10 +152,11 @@ class ControlPanel:
         with gui.add_folder("Playback"):
             self.pause_button = self.writer(gui.add_button("Pause", icon=viser.Icon.PLAYER_PAUSE))
             self.pause_button.on_click(lambda _e: self._toggle_pause())
-            # (viser cannot disable a button group: on a read-only panel a click is refused
-            # with a message instead, as any callback there is)
-            row = gui.add_button_group("Step", ("5 ms tick", "to lift-off", "to landing"))
-            row.on_click(lambda e: self._step(e.target.value))
+            # (viser disables a button group only when it is made, not through its handle)
+            self.step_row = gui.add_button_group(
+                "Step", ("5 ms tick", "to lift-off", "to landing"), disabled=self.read_only
+            )
+            self.step_row.on_click(lambda e: self._step(e.target.value))
             self.timeline = gui.add_slider(  # enabled while paused (see reflect)
                 "Timeline [s] (when paused)",
                 0.0,
