@@ -3,20 +3,26 @@ explanations and the kinematic analysis (Fig. 1-2, eq. 1-5). The text lives in
 :mod:`app.web.lessons`; this module builds the controls and reads the numbers from the frames.
 
 A lesson button writes intent only (parameters from their defaults, methods, a restart, as a
-preset does) and moves the clicking browser's camera. The live numbers are computed on the
-display thread from the frames the view shows and the session's 50 Hz plot rows: nothing
-under a lesson is written in advance. The "max seen" and "share of the time" columns count
-from the last change (the lesson's start, a parameter, the robots shown, a restart asked for;
-not the session's own restart after a fall), so a change's effect can be read; the falls
-count from the lesson's start. The lesson's text follows the state (``Lesson.now``), and
-when the numbers cannot follow the robots (changed by hand, waiting for a restart), the tab
-says so rather than freezing.
+preset does) and moves the clicking browser's camera. Which lesson runs is the *session's*
+state (:class:`LessonRun`, one per session, kept beside it on the web side): every view of
+the session shows its head, text, equations and live numbers, so the students watching an
+instructor's demo read the lesson the instructor started (their buttons are off). The live
+numbers are computed on the display thread from the frames the views show and the session's
+50 Hz plot rows: nothing under a lesson is written in advance. The "max seen" and "share of
+the time" columns count from the last change (the lesson's start, a parameter, the robots
+shown, a restart asked for; not the session's own restart after a fall), so a change's effect
+can be read, and every view reads the same tallies (each frame is counted once, whichever
+view draws it first); the falls count from the last restart asked for (the lesson's). The
+lesson's text follows the state (``Lesson.now``), and when the numbers cannot follow the
+robots (changed by hand, waiting for a restart), the tab says so rather than freezing.
 """
 
 from __future__ import annotations
 
 import html
 import math
+import threading
+import weakref
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -30,6 +36,8 @@ from controller.params import GROUPS
 
 if TYPE_CHECKING:
     from app.live.frames import RobotFrame
+    from app.live.intent import Intent
+    from app.live.session import SessionView
     from app.web.host import PanelHost
 
 NUMBERS_HZ = 2.0  # live-number refreshes per second while running
@@ -43,7 +51,7 @@ COLUMNS = {  # row label of each live number (Lesson.numbers)
     "status": "status now",
     "shares": "share of the time since the last change",
     "step": "step length in force",
-    "falls": "falls since the lesson started",
+    "falls": "falls since the lesson (or a restart asked for)",
     "reach": "leg reach now (max since the last change)",
     "kappa_legs": "kappa(J) of the legs now (max since the last change)",
     "waist": "waist yaw now (last two steps)",
@@ -90,22 +98,64 @@ class _Tally:
             self.kappa_max = max(self.kappa_max, r.kappa_legs)
 
 
+class LessonRun:
+    """The lesson running in one session and what its robots did since the last change:
+    shared by every view of the session (a lesson button replaces it)."""
+
+    def __init__(self, lesson: Lesson, start_clock: float):
+        self.lesson = lesson
+        self.start_clock = start_clock  # [s] session clock the lesson's robots started at
+        self.tallies: dict[str, _Tally] = {}  # since the last change
+        self.since = math.inf  # [s] session clock of the last change
+        self._change: tuple | None = None  # (params, methods, restarts asked for) in force
+        self._change_version = 0  # the intent of the last change: frames before it not counted
+        self._last_seq = -1
+        self._lock = threading.Lock()  # views draw on one thread today; a lock costs nothing
+
+    def observe(self, frame: LiveFrame, intent: Intent) -> None:
+        """Start the tallies anew at a change; count ``frame`` once (whichever view shows it
+        first)."""
+        with self._lock:
+            change = (intent.params, intent.methods, intent.reset_requests - intent.auto_restarts)
+            if change != self._change:  # the "max seen" columns count from here
+                first = self._change is None
+                restarted = first or change[2] != self._change[2]  # type: ignore[index]
+                self._change, self._change_version = change, intent.version
+                self.tallies = {}
+                # from the lesson's start, the robots' restart or (a new setting) now
+                self.since = (
+                    self.start_clock
+                    if first
+                    else max(frame.clock, intent.start_clock)
+                    if restarted
+                    else frame.clock
+                )
+            counted = frame.intent_version >= self._change_version and frame.clock >= self.since
+            if frame.seq > self._last_seq and not frame.paused and counted:
+                self._last_seq = frame.seq
+                for r in frame.robots:
+                    self.tallies.setdefault(r.method, _Tally()).add(r)
+
+
+# The lesson each session runs (weak: it goes with its session).
+_RUNS: weakref.WeakKeyDictionary[SessionView, LessonRun] = weakref.WeakKeyDictionary()
+
+
+def lesson_run(session: SessionView) -> LessonRun | None:
+    """The lesson ``session`` runs, or None."""
+    return _RUNS.get(session)
+
+
 class LearnTab:
     """The Learn tab's controls (built inside the tab by :class:`~app.web.panel.ControlPanel`)."""
 
     def __init__(self, gui: Any, panel: PanelHost):
         self.gui = gui
         self.panel = panel
-        self.lesson: Lesson | None = None
-        self.start_clock = math.inf  # [s] session clock the lesson's robots started at
-        self.tallies: dict[str, _Tally] = {}  # since the last change
-        self.falls0: dict[str, int] = {}  # each robot's falls when the lesson started
-        self._change: tuple | None = None  # (params, methods, restarts asked for) in force
-        self._change_version = 0  # the intent of the last change: frames before it not counted
-        self.since = math.inf  # [s] session clock of the last change
+        self.run: LessonRun | None = None  # the session's lesson this tab shows
         self._shown_time = -math.inf
-        self._last_seq = -1
-        self._camera: tuple[str, Any] | None = None  # a view to set once the robots are drawn
+        # a view to set once the robots are drawn (the browser that started the lesson)
+        self._camera: tuple[LessonRun, str, Any] | None = None
         with gui.add_folder("Guided lessons"):
             gui.add_markdown(
                 "Each button sets the parameters, the robots and the camera, and restarts the "
@@ -162,10 +212,16 @@ class LearnTab:
         if session.intent.paused:  # an experiment starts walking
             session.resume()
         intent = session.reset()
-        self.lesson = lesson
-        self.start_clock = intent.start_clock
-        self.tallies, self.falls0 = {}, {}
-        self._change = None
+        run = _RUNS[session] = LessonRun(lesson, intent.start_clock)
+        self._adopt(run)
+        # The view is fitted to the robots shown: set it once the scene shows the lesson's.
+        self._camera = (run, lesson.view, client)
+
+    def _adopt(self, run: LessonRun) -> None:
+        """Show the session's lesson ``run``: its head and text now, its numbers as the
+        robots restart."""
+        lesson = run.lesson
+        self.run = run
         self._shown_time = -math.inf
         self.head.content = (
             f'<div style="font: 13px/1.45 sans-serif"><b>{html.escape(lesson.title)}</b><br/>'
@@ -178,16 +234,27 @@ class LearnTab:
         )
         self.live.content = "<i>waiting for the robots to restart...</i>"
         self.now.content = ""
-        # The view is fitted to the robots shown: set it once the scene shows the lesson's.
-        self._camera = (lesson.view, client)
+
+    @property
+    def lesson(self) -> Lesson | None:
+        """The lesson this tab shows (the session's)."""
+        return self.run.lesson if self.run is not None else None
+
+    @property
+    def start_clock(self) -> float:
+        """[s] The session clock the shown lesson's robots started at (inf: no lesson)."""
+        return self.run.start_clock if self.run is not None else math.inf
 
     # -- live numbers (display thread) ------------------------------------------------------
     def update(self, frame: LiveFrame, now: float) -> None:
         """Tally the shown ``frame`` and refresh the lesson's live numbers (at most
         :data:`NUMBERS_HZ` a second while running, every new frame while paused)."""
-        lesson = self.lesson
-        if lesson is None:
+        run = lesson_run(self.panel.session)
+        if run is None:
             return
+        if run is not self.run:  # a lesson started (here, or in another view of the session)
+            self._adopt(run)
+        lesson = run.lesson
         if tuple(r.method for r in frame.robots) != lesson.methods:
             # the robots were changed by hand (or a new robot has not sent a frame yet)
             self._show(
@@ -198,33 +265,15 @@ class LearnTab:
                 "</i></div>",
             )
             return
-        if frame.clock < self.start_clock - 1e-9:
+        if frame.clock < run.start_clock - 1e-9:
             return  # the robots have not restarted yet: "waiting for the robots to restart"
         if self._camera is not None:  # the scene has drawn this frame's robots already
-            view, client = self._camera
+            started, view, client = self._camera
             self._camera = None
-            self.panel.view.scene.set_camera(view, client)
+            if started is run:
+                self.panel.view.scene.set_camera(view, client)
         intent = self.panel.session.intent
-        change = (intent.params, intent.methods, intent.reset_requests - intent.auto_restarts)
-        if change != self._change:  # the "max seen" columns count from here
-            first = self._change is None
-            restarted = first or change[2] != self._change[2]  # type: ignore[index]
-            self._change, self._change_version = change, intent.version
-            self.tallies = {}
-            # from the lesson's start, the robots' restart or (a new setting) now
-            self.since = (
-                self.start_clock
-                if first
-                else max(frame.clock, intent.start_clock)
-                if restarted
-                else frame.clock
-            )
-        counted = frame.intent_version >= self._change_version and frame.clock >= self.since
-        if frame.seq != self._last_seq and not frame.paused and counted:
-            self._last_seq = frame.seq
-            for r in frame.robots:
-                self.tallies.setdefault(r.method, _Tally()).add(r)
-                self.falls0.setdefault(r.method, r.falls)
+        run.observe(frame, intent)
         if lesson.now is not None:
             sentence = f'<div style="font: 13px/1.45 sans-serif">{lesson.now(intent.params)}</div>'
             if self.now.content != sentence:
@@ -241,8 +290,9 @@ class LearnTab:
 
     def numbers_html(self, frame: LiveFrame) -> str:
         """The lesson's live numbers as a table: one column per robot."""
-        lesson = self.lesson
-        assert lesson is not None
+        run = self.run
+        assert run is not None
+        lesson = run.lesson
         window = self.panel.session.history.window(
             2.0 * frame.robots[0].params.walk.step_time, until=frame.clock
         )
@@ -259,11 +309,11 @@ class LearnTab:
             rows.append(
                 f'<tr><td style="color:#5f6368;padding:2px 4px">{COLUMNS[key]}</td>{cells}</tr>'
             )
-        since = frame.clock - self.start_clock
+        since = frame.clock - run.start_clock
         state = "paused" if frame.paused else "live"
         changed = (
-            f"; last change at t = {self.since:.1f} s"
-            if math.isfinite(self.since) and self.since > self.start_clock + 0.05
+            f"; last change at t = {run.since:.1f} s"
+            if math.isfinite(run.since) and run.since > run.start_clock + 0.05
             else ""
         )
         return (
@@ -274,7 +324,7 @@ class LearnTab:
         )
 
     def _cell(self, key: str, r: RobotFrame, rows: np.ndarray | None) -> str:
-        tally = self.tallies.get(r.method) or _Tally()
+        tally = (self.run.tallies.get(r.method) if self.run else None) or _Tally()
         recent = rows if rows is not None and len(rows) else np.full((1, len(COL)), np.nan)
 
         def col(name: str) -> np.ndarray:
@@ -301,8 +351,8 @@ class LearnTab:
             return "<br/>".join(parts) or "-"
         if key == "step":
             return f"{r.step_length:.2f} m (step {max(r.step_index, 0)})"
-        if key == "falls":
-            return str(r.falls - self.falls0.get(r.method, r.falls))
+        if key == "falls":  # the lesson's restart started the count again
+            return str(r.falls)
         if key == "reach":
             return f"{_num(float(np.max(r.reach)), 3)} ({_num(tally.reach_max, 3)})"
         if key == "kappa_legs":
