@@ -82,7 +82,11 @@ class RemoteSession(SessionView):
         self._rows: dict[str, list[np.ndarray]] = {}  # rows since the last merged frame
         self._restarted = False
         self._seq = 0
-        self._merge_lock = threading.Lock()
+        # held while a merged frame is made *and handed on*: the parts' receiver threads all
+        # merge while paused, and a frame handed on after a newer one would read as a clock
+        # going back and clear the kept frames (the first pause kept only the last instants).
+        # Re-entrant: receive() may ask for the newest clock (_newest_clock) under it.
+        self._merge_lock = threading.RLock()
 
     def part_id(self, method: str) -> str:
         return f"{self.sid}/{method}"
@@ -167,7 +171,7 @@ class RemoteSession(SessionView):
                 restarted=self._restarted,
             )
             self._rows, self._restarted = {}, False
-        self.receive(merged)
+            self.receive(merged)  # in merge order (see _merge_lock)
 
 
 def _at(recent: collections.deque[LiveFrame], instant: float) -> LiveFrame:
