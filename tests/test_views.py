@@ -335,3 +335,30 @@ def test_a_stopped_loop_is_said_in_the_status(panel_view):
         assert any("the simulation stopped: RuntimeError" in a for a in view.alerts())
     finally:
         sim.error = None
+
+
+def test_no_two_slider_marks_share_a_place_and_presets_read_whole(panel_view):
+    """Tick labels of a slider never lie on each other (beta_pel's paper value is its
+    slider's lower end: one mark says both), and the preset buttons' labels are short
+    enough to read whole in the docked panel."""
+    from app.web.lessons import PRESETS
+    from app.web.plots import log_axis
+
+    _sim, view, _client = panel_view
+    for (group, name), (handle, _log) in view.panel.controls.items():
+        marks = getattr(getattr(handle, "_impl", None), "props", None)
+        marks = [(m.value, m.label) for m in (getattr(marks, "_marks", None) or ())]
+        if not marks:
+            continue
+        at = sorted(m[0] for m in marks)
+        span = handle.max - handle.min
+        assert all(b - a >= 0.12 * span for a, b in zip(at, at[1:], strict=False)), (
+            group,
+            name,
+            marks,
+        )
+    beta = view.panel.controls[("pelvis", "beta")][0]._impl.props._marks
+    assert any("paper" in (m.label or "") and "1e-10" in (m.label or "") for m in beta), beta
+    assert all(len(name) <= 40 for name in PRESETS), list(PRESETS)
+    axis = log_axis(1.0, 1e4)  # the top decade, the plot's edge, is left unlabelled
+    assert axis["values"][-1] == "" and axis["values"][-2] == "1e3"

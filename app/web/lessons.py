@@ -44,20 +44,28 @@ PAPER_LIMIT_M = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
 #           (kappa of the legs ~1e9, reach 0.99+) and 36 IK ticks sit at the joint-speed
 #           limit; mpc clean (kappa 40, waist 25 deg).
 #   0.42 m: fixed falls in its second step (3.08 s, torso tilted over 30 deg); mpc clean.
-PRESETS: dict[str, dict[str, Any]] = {
-    "Paper: 0.30 m (the paper's fixed limit; every robot clean here)": {
+PRESETS: dict[str, dict[str, Any]] = {  # button label (short: it must read whole) -> preset
+    "0.30 m: every robot clean": {
         "walk": {"step_length": 0.30, "step_time": 1.2},
         "methods": ["fixed", "redundancy", "mpc"],
+        "hint": "The paper's limit for the fixed pelvis: every robot walks cleanly here.",
     },
-    "Paper: 0.40 m: our fixed pelvis's knee straightens, the MPC stays clean": {
+    "0.40 m: the fixed knee straightens": {
         "walk": {"step_length": 0.40, "step_time": 1.2},
         "methods": ["fixed", "mpc"],
+        "hint": "The paper's limit with pelvic rotation: our fixed pelvis's swing knee "
+        "straightens, the MPC stays clean.",
     },
-    "Eq. 5's 0.42 m: our fixed pelvis falls, the MPC walks": {
+    "0.42 m (eq. 5): the fixed pelvis falls": {
         "walk": {"step_length": 0.42, "step_time": 1.2},
         "methods": ["fixed", "mpc"],
+        "hint": "Eq. 5's step with the pelvis at 45 deg: our fixed pelvis falls, the MPC walks.",
     },
-    "Defaults": {"walk": {"step_length": 0.2, "step_time": 1.2}, "reset_groups": True},
+    "Defaults": {
+        "walk": {"step_length": 0.2, "step_time": 1.2},
+        "reset_groups": True,
+        "hint": "Every parameter back to its default, 0.20 m steps.",
+    },
 }
 
 
@@ -108,7 +116,7 @@ LESSONS: tuple[Lesson, ...] = (
         "straight</i> or <i>IK at the speed limit</i>. The MPC robot turns its pelvis (about "
         "25°): its kappa stays near 40 and its badge <i>clean</i>. Our limits: fixed "
         f"{_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
-        "press the preset <i>Eq. 5's 0.42 m</i> and the fixed robot falls.",
+        "press the preset <i>0.42 m (eq. 5)</i> and the fixed robot falls.",
         ("4", "5", "45"),
         ("status", "shares", "reach", "kappa_legs", "waist", "falls"),
     ),
@@ -118,10 +126,11 @@ LESSONS: tuple[Lesson, ...] = (
         {"step_length": 0.40, "step_time": 1.2},
         ("mpc",),
         "top",
-        "Press <b>Pause</b> while both feet are down (phase <i>DSP</i> below), or <b>Step: to "
-        "lift-off</b>, and open the <b>Inspect</b> tab: the reference angle (eq. 30-31) already "
-        "sees the next footholds over the 1.6 s horizon, and the MPC's plan (eq. 37) turns the "
-        "pelvis toward the coming swing before the foot lifts (its rate reverses in the DSP). "
+        "Press <b>Pause</b> while both feet are down (phase <i>DSP</i> in the table above), or "
+        "<b>Step: to lift-off</b>, and open the <b>Inspect</b> tab: the reference angle "
+        "(eq. 30-31) already sees the next footholds over the 1.6 s horizon, and the MPC's "
+        "plan (eq. 37) turns the pelvis toward the coming swing before the foot lifts (its "
+        "rate reverses in the DSP). "
         "The table above is read from the frame shown (paused, the paused instant): the "
         "planned angle now and at the end of the horizon, and the waist rate now.",
         ("30", "31", "37"),
@@ -156,9 +165,10 @@ LESSONS: tuple[Lesson, ...] = (
         "top",
         "k_pel scales the reference angle for a given foot-to-pelvis distance (eq. 31): at 0.10 "
         "the pelvis turns less and the legs must reach further (the reach and kappa rise). Raise "
-        "<b>k_pel</b> (Pelvic MPC folder) to 0.25 and 0.5 and read the waist range, reach and "
-        "kappa; then shorten the <b>horizon</b> below one step (1.2 s): the MPC no longer sees "
-        "the next foothold in time.",
+        "<b>k_pel</b> (Controls tab, folder <i>Pelvic MPC</i>) to 0.25 and 0.5 and read the "
+        "waist range, reach and kappa; then shorten the <b>Horizon H</b> (folder <i>CoM "
+        "MPC</i>: both MPCs use it) below one step (1.2 s): the MPC no longer sees the next "
+        "foothold in time.",
         ("31", "37"),
         ("settings", "waist", "reach", "kappa_legs", "status", "falls"),
         {"pelvis": {"k_pel": 0.10}},
@@ -204,8 +214,9 @@ LESSONS: tuple[Lesson, ...] = (
         "(eq. 19) moves to bring the measured CoM back onto the planned one, but <b>nothing "
         "moves the footsteps</b>: a push the foot cannot absorb "
         f"topples the robot (try 300 N): it lies ringed in red for {FALL_HOLD_S:g} s, then "
-        "every robot restarts together. <code>pelvic-walk push-study</code> measures each "
-        "method's limit (README, Push).",
+        "every robot restarts together. In a terminal, <code>pelvic-walk push-study</code> "
+        "measures the largest push each method survives (<code>pelvic-walk push-study "
+        "--help</code> for the direction, duration and step length).",
         ("18",),
         ("pushing", "lateral", "status", "falls"),
     ),

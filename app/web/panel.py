@@ -51,10 +51,9 @@ READ_ONLY_NOTE = (
     "here; the camera, layers, plots, inspector and recording are yours."
 )
 REFUSED = "**Not applied:** the instructor drives this demo (your controls are read-only)."
-DISABLED_SLIDER_STYLE = (
-    "<style>.mantine-Slider-root[data-disabled] ~ .mantine-NumberInput-root,"
-    ".mantine-Slider-root[data-disabled] ~ * .mantine-NumberInput-input"
-    "{opacity:.45;pointer-events:none}</style>"
+DISABLED_SLIDER_STYLE = (  # (Mantine marks a disabled slider's track, not its root)
+    "<style>.mantine-Slider-root:has(.mantine-Slider-trackContainer[data-disabled])"
+    " ~ .mantine-NumberInput-root{opacity:.45;pointer-events:none}</style>"
 )
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
 PUSH_DIRECTIONS = {
@@ -193,8 +192,8 @@ class ControlPanel:
                 box.on_update(lambda _e: self._methods_changed())
                 self.method_boxes[method] = box
         with gui.add_folder("Presets", expand_by_default=False):
-            for name in PRESETS:
-                button = self.writer(gui.add_button(name))
+            for name, preset in PRESETS.items():
+                button = self.writer(gui.add_button(name, hint=preset.get("hint")))
                 button.on_click(lambda _e, name=name: self.apply_preset(name))
         for group in GROUPS:
             meta_all = spec(getattr(intent.params, group))
@@ -247,7 +246,12 @@ class ControlPanel:
             marks: tuple[tuple[float, str], ...] | None
             marks = tuple((round(x), f"1e{round(x)}") for x in (lo, hi))
             if meta.get("paper"):
-                marks += ((math.log10(meta["paper"]), "paper"),)
+                # the paper's value at (or near) an end: one mark there, not two labels on
+                # top of each other (beta_pel's paper value is its slider's lower end)
+                at = math.log10(meta["paper"])
+                near = [m for m in marks if abs(m[0] - at) < 0.12 * (hi - lo)]
+                marks = tuple(m for m in marks if m not in near)
+                marks += ((at, f"{near[0][1]} paper" if near else "paper"),)
             handle = gui.add_slider(
                 f"{meta['label']}, log10",
                 lo,
@@ -438,9 +442,11 @@ class ControlPanel:
                 state = "walked its whole plan"
             else:
                 state = f"step {max(r.step_index, 0)}, {r.step_length:.2f} m"
+            kappa = (  # no "kappa -" while there is nothing to measure (standing by)
+                f"kappa {kappa_text(r.kappa_legs)}, " if math.isfinite(r.kappa_legs) else ""
+            )
             lines.append(
-                f"**{METHOD_INFO[r.method].title}**: {r.status}, kappa {kappa_text(r.kappa_legs)}, "
-                f"{state}, falls {r.falls}"
+                f"**{METHOD_INFO[r.method].title}**: {r.status}, {kappa}{state}, falls {r.falls}"
             )
         lines += [f"⚠ {w}" for w in warnings_for(intent.params, intent.methods)]
         extra = self.view.alerts()

@@ -39,6 +39,9 @@ PLOTS: tuple[tuple[str, str, tuple[float, float]], ...] = (  # (row column, titl
 )
 LOG_PLOTS = {"kappa_legs"}  # drawn on a log10 axis: a straight knee's 1e8 beside a clean 30
 LOG_MAX = 1e12  # the log axis's top at most (kappa is finite but unbounded at a straight knee)
+# the legends name the lines only: uPlot's live values ("--" until the pointer is on the
+# plot) left gaps after every name in a narrow panel
+LEGEND = viser.uplot.Legend(show=True, live=False)
 
 
 def css(rgb: tuple[int, int, int], alpha: float = 1.0) -> str:
@@ -65,9 +68,13 @@ def log_axis(lo: float, hi: float) -> viser.uplot.Axis:
     d0, d1 = round(math.log10(lo)), round(math.log10(hi))
     every = 1 if d1 - d0 <= 6 else 2
     decades = list(range(d0, d1 + 1, every))
+    # the top decade's line is the plot's top edge: a label there is cut in half (uPlot snaps
+    # a log range to whole decades, so no head room can be given), so it is left unlabelled
     return viser.uplot.Axis(
         splits=tuple(10.0**d for d in decades),
-        values=tuple(f"{10**d:g}" if d < 3 else f"1e{d}" for d in decades),
+        values=tuple(
+            "" if d == d1 and d > d0 else f"{10**d:g}" if d < 3 else f"1e{d}" for d in decades
+        ),
         size=44,
     )
 
@@ -203,6 +210,7 @@ class LivePlots:
                     title=title,
                     aspect=2.0,
                     scales={"x": viser.uplot.Scale(time=False, range=(-WINDOWS_S[0], 0.0))},
+                    legend=LEGEND,
                 )
         self._methods = methods
         self._scales = {}
@@ -232,6 +240,7 @@ class HorizonInspector:
                 viser.uplot.Series(label="right foot x (plan)", stroke=plan, width=2, dash=(6, 4)),
             ),
             aspect=2.0,
+            legend=LEGEND,
         )
         self.zmp = gui.add_uplot(
             data=tuple(np.zeros(2, dtype=np.float32) for _ in range(6)),
@@ -245,6 +254,7 @@ class HorizonInspector:
                 viser.uplot.Series(label="max", stroke=plan, width=1),
             ),
             aspect=2.0,
+            legend=LEGEND,
         )
         self.theta = gui.add_uplot(
             data=tuple(np.zeros(2, dtype=np.float32) for _ in range(3)),
@@ -256,6 +266,7 @@ class HorizonInspector:
                 viser.uplot.Series(label="theta_ref (eq. 33)", stroke=ref, width=2, dash=(8, 5)),
             ),
             aspect=2.0,
+            legend=LEGEND,
         )
         self.theta_note = gui.add_markdown("")
         self._key: tuple | None = None
