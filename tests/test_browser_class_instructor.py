@@ -115,3 +115,49 @@ def test_students_watch_and_the_instructor_drives_everyone(tool):
             teacher.screenshot(path=str(ARTIFACTS / "class_instructor.png"))
         finally:
             browser.close()
+
+
+def test_the_instructors_lesson_shows_on_every_students_page_and_the_token_hides(tool):
+    """The page the instructor projects drops the token from its address bar and its links;
+    a lesson the instructor starts shows on the student's Learn tab (head, text, live
+    numbers), whose lesson buttons stay off."""
+    from browser_util import open_tab, press, scroll_into_view
+    from playwright.sync_api import sync_playwright
+
+    from app.web.lessons import LESSONS
+
+    base = tool
+    lesson = LESSONS[0]
+    with sync_playwright() as p:
+        browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
+        try:
+            teacher, t_scene = _open(browser, f"{base}/?token={TOKEN}")
+            student, s_scene = _open(browser, f"{base}/")
+            _until(lambda: TOKEN not in teacher.url, "the token to leave the address bar")
+            assert TOKEN not in teacher.locator("nav").inner_html()
+            t_scene.get_by_text("Instructor").first.wait_for()  # it still drives
+            open_tab(t_scene, "Learn")
+            open_tab(s_scene, "Learn")
+            s_button = s_scene.get_by_role("button", name=lesson.title).first
+            _until(lambda: s_button.is_disabled(), "the student's lesson buttons to be off")
+            box = s_scene.locator(".lesson-live").first
+            pressed = []
+
+            def shown() -> bool:
+                if box.count() and "into the lesson" in box.inner_text():
+                    return True
+                if not pressed:  # once: a lesson started twice would be harmless too
+                    button = t_scene.get_by_role("button", name=lesson.title).first
+                    scroll_into_view(button)
+                    press(button)
+                    pressed.append(True)
+                return False
+
+            _until(shown, "the lesson's live numbers on the student's page")
+            assert s_scene.get_by_text(lesson.title).count() >= 2  # its button and its head
+            assert s_scene.get_by_text(lesson.paper, exact=False).count() >= 1
+            scroll_into_view(box)
+            ARTIFACTS.mkdir(parents=True, exist_ok=True)
+            student.screenshot(path=str(ARTIFACTS / "class_student_lesson.png"))
+        finally:
+            browser.close()
