@@ -49,9 +49,8 @@ class Settings(BaseSettings):
     viser_port: int = Field(default=8080, ge=1, le=65535)  # viser (3-D scene and GUI)
     # None: the latest `pelvic-walk experiments --out DIR`, else the packaged reference report
     report_dir: Path | None = None
-    # None for both: one robot per worker, ROBOTS_PER_CORE per core (worker_layout). With 20
-    # viewers on 2 cores, 2 robots sharing a worker kept a median real-time factor of 0.96
-    # (min 0.79), one per worker 0.99-1.0 (README, "A classroom at real time").
+    # None for both: one robot per worker, ROBOTS_PER_CORE per core (worker_layout); what a
+    # machine holds is measured with serve + loadtest (docs/PERFORMANCE.md, "Capacity").
     # workers 0: the robots run in the web process.
     workers: int | None = Field(default=None, ge=0, le=64)
     sessions: Literal["shared", "private"] = "shared"
