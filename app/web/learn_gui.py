@@ -159,7 +159,7 @@ class LearnTab:
         with gui.add_folder("Guided lessons"):
             gui.add_markdown(
                 "Each button sets the parameters, the robots and the camera, and restarts the "
-                "robots; the numbers under the lesson are read from them as they walk."
+                "robots; the table above the lesson's text is read from them as they walk."
             )
             self.buttons = []
             for i, lesson in enumerate(LESSONS):
