@@ -140,7 +140,11 @@ def test_lesson6_shows_the_fall_then_every_robot_walks_in_step(tool, page):
         "the fall's red ring on the screen",
     )
     state = _get(tool, "state")
-    assert any(r["fell"] for r in state["robots"]), "restarted before the ring was seen"
+    lying = [r for r in state["robots"] if r["fell"]]
+    assert lying, "restarted before the ring was seen"
+    # it lies within its hold: this fall's or, on a starved machine where the ring took a
+    # whole walk cycle to be seen, the next fall's (the session's own restarts go on)
+    fell_at = lying[0]["fell_at"]
     assert state["clock"] < fell_at + FALL_HOLD_S + 0.5
     mpc = next(r for r in state["robots"] if r["method"] == "mpc")
     assert not mpc["fell"]  # the MPC robot walks on meanwhile
