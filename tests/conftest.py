@@ -19,25 +19,46 @@ import contextlib
 import os
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
 # Whole files that are slow (the rest mark single tests with @pytest.mark.slow).
 SLOW_FILES = {"test_install", "test_schemathesis", "test_lint", "test_loadtest"}
+BROWSER_GROUP = "real-browser tests"
 BROWSER_RERUNS = 1 if os.environ.get("CI", "").lower() in ("true", "1", "yes") else 0
 
 
-@pytest.hookimpl(tryfirst=True)  # before xdist reads the marks into the node ids
+@pytest.hookimpl(tryfirst=True)
 def pytest_collection_modifyitems(config, items):
     for item in items:
-        browser = item.get_closest_marker("browser") is not None
         if item.module.__name__ in SLOW_FILES:
             item.add_marker(pytest.mark.slow)
-        if browser and BROWSER_RERUNS:
+        if item.get_closest_marker("browser") is not None and BROWSER_RERUNS:
             item.add_marker(pytest.mark.flaky(reruns=BROWSER_RERUNS))
-        if not any(item.iter_markers("xdist_group")):
-            group = "browser" if browser else item.module.__name__
-            item.add_marker(pytest.mark.xdist_group(group))
+
+
+def xdist_group_of(nodeid: str) -> str:
+    """The group a test runs in under xdist: its file, or one group for every real-browser
+    file (``tests/test_browser*.py``: the files whose tests drive Chromium)."""
+    path = nodeid.split("::", 1)[0]
+    return BROWSER_GROUP if Path(path).name.startswith("test_browser") else path
+
+
+def pytest_xdist_make_scheduler(config, log):
+    """``--dist loadgroup`` by :func:`xdist_group_of`. xdist's own loadgroup reads ``xdist_group``
+    marks into node ids, which pytest 9 no longer lets it rewrite: the marks were silently
+    ignored and two browser files ran at once. The scheduler sees node ids only, hence groups
+    by file name."""
+    if config.getvalue("dist") != "loadgroup":
+        return None
+    from xdist.scheduler import LoadScopeScheduling
+
+    class ByTestGroup(LoadScopeScheduling):
+        def _split_scope(self, nodeid: str) -> str:
+            return xdist_group_of(nodeid)
+
+    return ByTestGroup(config, log)
 
 
 @pytest.fixture(scope="session", autouse=True)
