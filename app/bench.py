@@ -10,10 +10,13 @@ Everything comes from one invocation, on one robot, headless:
    ``ticks`` ticks are. ``tick_ms_*`` time ``Walker.tick`` alone (all layers); ``layer_ms``
    are the per-layer medians the walker reports with its injected clock; ``realtime_factor``
    is simulated time / wall time of the whole loop over the measured ticks.
+   **Unrecorded** (``*_unrecorded``): the same loop as a live worker steps it
+   (``Session(record=False)``: no time series and no per-tick measurement, which only headless
+   runs need; :func:`unrecorded_loop`), i.e. a classroom robot's tick before its frames.
 2. **MuJoCo alone** (``bare_step_realtime_factor``): a second world of the same model and
    timestep, servo targets held at the walk-ready keyframe, only ``mj_step``, as many
-   substeps as the closed loop ran. Half is run before and half after the closed loop so a
-   change of machine load during the run biases both figures alike.
+   substeps as the closed loop ran. Half is run before and half after the closed loops so a
+   change of machine load during the run biases the figures alike.
 3. **QP back-ends** (``qp_backends``): every QP the four layers built during a real walk (a
    separate session, same parameters, same ticks) is recorded, then the sequence is re-solved by
    a fresh :class:`controller.qp.QpSolver` per back-end (warm starts as in the loop). Reported
@@ -119,6 +122,24 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         "sim_dt": session.world.sim_dt,
         "control_dt": session.params.control_dt,
     }
+
+
+def unrecorded_loop(ticks: int) -> dict[str, Any]:
+    """The closed loop as a live worker steps it: ``Session(record=False)`` (controller, MuJoCo,
+    the energy at step starts and the fall test; no time series, no per-tick measurement, no
+    frames), after the same warm-up. What one classroom robot costs per tick before its
+    display (the frames are in :func:`live_loop`)."""
+    session = Session(RunConfig(params=bench_params(ticks)), record=False)
+    for _ in range(_warmup_ticks(session)):
+        session.tick()
+    cpu0 = time.process_time()
+    start = time.perf_counter()
+    for _ in range(ticks):
+        session.tick()
+    wall = time.perf_counter() - start
+    cpu = time.process_time() - cpu0
+    sim_time = ticks * session.params.control_dt
+    return {"sim_time": sim_time, "wall_time": wall, "cpu_time": cpu}
 
 
 def live_loop(ticks: int) -> dict[str, Any]:
@@ -469,6 +490,7 @@ def run_bench(ticks: int = 600, peer_python_path: str | None = None) -> dict[str
     half = ticks * n_sub // 2
     bare_sim, bare_wall, bare_cpu = bare_steps(half, sim_dt, control_dt)
     loop = closed_loop(ticks)
+    unrecorded = unrecorded_loop(ticks)
     s2, w2, c2 = bare_steps(ticks * n_sub - half, sim_dt, control_dt)
     bare_sim, bare_wall, bare_cpu = bare_sim + s2, bare_wall + w2, bare_cpu + c2
     bare_rtf = bare_sim / bare_wall
@@ -476,6 +498,8 @@ def run_bench(ticks: int = 600, peer_python_path: str | None = None) -> dict[str
     # machine (time spent waiting for a core is not counted).
     loop_rtf_cpu = loop["sim_time"] / loop["cpu_time"]
     bare_rtf_cpu = bare_sim / bare_cpu
+    unrec_rtf = unrecorded["sim_time"] / unrecorded["wall_time"]
+    unrec_rtf_cpu = unrecorded["sim_time"] / unrecorded["cpu_time"]
     tick_cpu = tick_cpu_ms(ticks)
     live = live_loop(ticks)
     paced = paced_loop(ticks)
@@ -511,6 +535,10 @@ def run_bench(ticks: int = 600, peer_python_path: str | None = None) -> dict[str
         "realtime_factor_cpu": loop_rtf_cpu,
         "bare_step_realtime_factor_cpu": bare_rtf_cpu,
         "overhead_ratio_cpu": bare_rtf_cpu / loop_rtf_cpu,
+        "realtime_factor_unrecorded": unrec_rtf,
+        "overhead_ratio_unrecorded": bare_rtf / unrec_rtf,
+        "realtime_factor_unrecorded_cpu": unrec_rtf_cpu,
+        "overhead_ratio_unrecorded_cpu": bare_rtf_cpu / unrec_rtf_cpu,
         "fell": loop["fell"],
         "qp_backends": qp,
         "peer": peer,
@@ -553,6 +581,10 @@ def format_report(r: dict[str, Any]) -> str:
         f"{r['bare_step_realtime_factor']:.1f}   overhead ratio {r['overhead_ratio']:.2f}   "
         f"(CPU time: {r['realtime_factor_cpu']:.1f} / {r['bare_step_realtime_factor_cpu']:.1f}"
         f" / {r['overhead_ratio_cpu']:.2f})",
+        f"  unrecorded (live)  closed loop {r['realtime_factor_unrecorded']:.1f}   overhead "
+        f"ratio {r['overhead_ratio_unrecorded']:.2f}   (CPU time: "
+        f"{r['realtime_factor_unrecorded_cpu']:.1f} / {r['overhead_ratio_unrecorded_cpu']:.2f}):"
+        " a live robot's tick, no series, frames aside",
         "QP back-ends (QpSolver.solve on the QPs of a real walk; deviation from the exact "
         "solution):",
         f"  {'layer':11s} {'size':>8s}   {'daqp med/p99 [us]':>18s} {'max dev':>9s}   "

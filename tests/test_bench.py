@@ -17,6 +17,9 @@ INTERFACE_KEYS = (
     "realtime_factor",
     "bare_step_realtime_factor",
     "overhead_ratio",
+    "realtime_factor_unrecorded",
+    "overhead_ratio_unrecorded",
+    "overhead_ratio_unrecorded_cpu",
 )
 LAYERS = ("com_mpc", "pelvis_mpc", "ik", "arm_swing", "kinematics")
 
@@ -43,6 +46,8 @@ def test_interface_keys_are_finite_and_positive(report):
 def test_overhead_ratio_is_the_ratio_of_the_two_factors(report):
     ratio = report["bare_step_realtime_factor"] / report["realtime_factor"]
     assert report["overhead_ratio"] == pytest.approx(ratio)
+    unrecorded = report["bare_step_realtime_factor"] / report["realtime_factor_unrecorded"]
+    assert report["overhead_ratio_unrecorded"] == pytest.approx(unrecorded)
 
 
 def test_qp_backend_table(report):
