@@ -241,21 +241,26 @@ def test_serve_refuses_workers_that_cannot_hold_the_demo(capsys):
     assert len(err) == 1 and "cannot hold the 3 robots" in err[0] and "--workers" in err[0]
 
 
-def test_worker_layout_gives_every_robot_its_own_worker_by_default(monkeypatch):
-    """The robots of one worker share one core (the GIL): by default one robot per worker,
-    ROBOTS_PER_CORE per core; given only --workers, they share that many robots out."""
+def test_worker_layout_fills_the_measured_capacity_a_session_per_worker(monkeypatch):
+    """ROBOTS_PER_CORE robots a core; by default a session's robots per worker (they share one
+    core, the GIL) and as many workers as that fills; given one option, the other follows."""
     from app.web import settings
 
+    monkeypatch.setattr(settings, "ROBOTS_PER_CORE", 4.5)
     monkeypatch.setattr(settings.os, "cpu_count", lambda: 2)
-    assert settings.worker_layout(None, None) == (4, 1)
-    assert settings.worker_layout(1, None) == (1, 4)
-    assert settings.worker_layout(3, None) == (3, 2)  # 4 robots over 3 workers: 2 each at most
-    assert settings.worker_layout(None, 2) == (2, 2)
+    assert settings.worker_layout(None, None) == (3, 3)  # 9 robots: the demo + 2 sessions
+    assert settings.worker_layout(1, None) == (1, 9)
+    assert settings.worker_layout(4, None) == (4, 3)  # 9 robots over 4 workers: 3 each at most
+    assert settings.worker_layout(None, 2) == (4, 2)
+    assert settings.worker_layout(None, 20) == (1, 20)  # more than the capacity: one worker
     assert settings.worker_layout(5, 3) == (5, 3)  # both given: as given
     monkeypatch.setattr(settings.os, "cpu_count", lambda: None)  # unknown: one core
-    assert settings.worker_layout(None, None) == (2, 1)
+    assert settings.worker_layout(None, None) == (1, 3)  # the demo's three robots fit
     monkeypatch.setattr(settings.os, "cpu_count", lambda: 32)  # a big machine: capped workers
-    assert settings.worker_layout(None, None) == (settings.MAX_DEFAULT_WORKERS, 4)
+    assert settings.worker_layout(None, None) == (settings.MAX_DEFAULT_WORKERS, 3)
+    monkeypatch.setattr(settings, "ROBOTS_PER_CORE", 2)  # the rule, not the figure
+    monkeypatch.setattr(settings.os, "cpu_count", lambda: 2)
+    assert settings.worker_layout(None, None) == (1, 3)
 
 
 def test_pages(client):

@@ -18,22 +18,32 @@ from typing import Literal
 from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-ROBOTS_PER_CORE = 2  # a core holds about two robots at 1.0x (`pelvic-walk bench`)
+# Robots a core keeps at 1.0x with the web process and 20 viewers on the same machine, measured
+# with `serve --sessions private` + `loadtest --viewers 20` (docs/PERFORMANCE.md, "Capacity":
+# 9 robots held on 2 cores, 12 did not). `pelvic-walk bench`'s paced figure (8-13 robot loops
+# a core) leaves out the viewers, the frames and the hand-offs.
+ROBOTS_PER_CORE = 4.5
+SESSION_ROBOTS = 3  # a session's robots by default (the demo's three methods)
 MAX_DEFAULT_WORKERS = 16  # each worker holds MuJoCo and Pinocchio (~130 MB resident)
 
 
 def worker_layout(workers: int | None, robots_per_worker: int | None) -> tuple[int, int]:
     """(worker processes, robots each) from the options given (None: not given).
 
-    The robots of one worker take turns on one core (Python's GIL), so by default every robot
-    gets a worker of its own and the operating system spreads them over the cores: as many
-    workers as the machine holds robots, ROBOTS_PER_CORE per core (at most
-    MAX_DEFAULT_WORKERS, which then share the robots out). Given only ``workers``, each holds
-    its share of that many robots; 0 workers run the robots in the web process.
+    The machine's capacity is ROBOTS_PER_CORE robots a core. The robots of one worker take
+    turns on one core (Python's GIL), so by default a worker holds a session's worth of robots
+    (SESSION_ROBOTS) and there are as many workers as the capacity fills (at most
+    MAX_DEFAULT_WORKERS): the pool spreads a session's robots over the workers and the
+    operating system the workers over the cores. On 2 cores: 3 workers x 3 robots, the demo and
+    two private sessions of three. Given only ``workers``, they share the capacity out; given
+    only ``robots_per_worker``, the capacity decides the workers; 0 workers run the robots in
+    the web process.
     """
-    capacity = ROBOTS_PER_CORE * (os.cpu_count() or 1)
+    capacity = max(1, int(ROBOTS_PER_CORE * (os.cpu_count() or 1)))
     if workers is None:
-        workers = min(capacity // (robots_per_worker or 1), MAX_DEFAULT_WORKERS) or 1
+        per_worker = robots_per_worker or SESSION_ROBOTS
+        workers = min(capacity // per_worker, MAX_DEFAULT_WORKERS) or 1
+        robots_per_worker = per_worker
     if robots_per_worker is None:
         robots_per_worker = max(1, -(-capacity // max(workers, 1)))  # ceil
     return workers, robots_per_worker
@@ -49,8 +59,9 @@ class Settings(BaseSettings):
     viser_port: int = Field(default=8080, ge=1, le=65535)  # viser (3-D scene and GUI)
     # None: the latest `pelvic-walk experiments --out DIR`, else the packaged reference report
     report_dir: Path | None = None
-    # None for both: one robot per worker, ROBOTS_PER_CORE per core (worker_layout); what a
-    # machine holds is measured with serve + loadtest (docs/PERFORMANCE.md, "Capacity").
+    # None for both: a session's robots per worker, ROBOTS_PER_CORE robots a core
+    # (worker_layout); what a machine holds is measured with serve + loadtest
+    # (docs/PERFORMANCE.md, "Capacity").
     # workers 0: the robots run in the web process.
     workers: int | None = Field(default=None, ge=0, le=64)
     sessions: Literal["shared", "private"] = "shared"
