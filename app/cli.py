@@ -83,8 +83,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--workers",
         type=int,
         default=None,
-        help="worker processes running the robots (default: one per robot the machine holds, "
-        "two per core; 0: in this process)",
+        help="worker processes running the robots (default: as many as fill the machine's "
+        "capacity, 4.5 robots a core, with 3 robots each: 3 on 2 cores; 0: in this process)",
     )
     p.add_argument(
         "--sessions",
@@ -97,8 +97,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--robots-per-worker",
         type=positive_int,
         default=None,
-        help="robots one worker runs at once (default: 1, or two per core shared out over the "
-        "--workers given; a worker's robots share one core)",
+        help="robots one worker runs at once (default: 3, a session's robots, or the capacity "
+        "of 4.5 robots a core shared out over the --workers given; a worker's robots share one "
+        "core)",
     )
     p.add_argument(
         "--display-hz",

@@ -2,9 +2,10 @@
 
 Processes and threads (the machine may have only two cores):
 
-- **worker processes** (``--workers``, default two per core, one robot each;
-  ``app.live.pool``) run the live sessions, each paced to real time, and send their frames
-  back; with ``--workers 0`` the shared session runs in a thread of this process instead;
+- **worker processes** (``--workers`` x ``--robots-per-worker``, by default 4.5 robots a core
+  in workers of 3 robots: ``app.web.settings.worker_layout``; ``app.live.pool``) run the live
+  sessions, each paced to real time, and send their frames back; with ``--workers 0`` the
+  shared session runs in a thread of this process instead;
 - the **display** thread (:class:`~app.web.view.Display`) draws each view's shown frame at
   most ``--display-hz`` times a second; viser's own thread sends the scene to the browsers;
 - **uvicorn** serves the page and the HTTP API in the main thread.
