@@ -1,5 +1,5 @@
 """Performance figures: ``pelvic-walk bench [--json PATH] [--ticks N]``
-(docs/INTERFACES.md, "bench JSON").
+(docs/REFERENCE.md, "bench JSON").
 
 Everything comes from one invocation, on one robot, headless:
 

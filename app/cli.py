@@ -1,4 +1,4 @@
-"""The ``pelvic-walk`` command line (docs/INTERFACES.md, "Command line").
+"""The ``pelvic-walk`` command line (docs/REFERENCE.md, "Command line").
 
 Bad arguments exit with status 2 and one clear line on stderr, never a traceback.
 """

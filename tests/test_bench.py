@@ -1,4 +1,4 @@
-"""`pelvic-walk bench`: it runs and writes every key of docs/INTERFACES.md, "bench JSON" (no
+"""`pelvic-walk bench`: it runs and writes every key of docs/REFERENCE.md, "bench JSON" (no
 timing assertions)."""
 
 from __future__ import annotations

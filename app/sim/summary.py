@@ -1,4 +1,4 @@
-"""A run's summary: the keys of ``simulate --json`` (docs/INTERFACES.md, "simulate JSON")
+"""A run's summary: the keys of ``simulate --json`` (docs/REFERENCE.md, "simulate JSON")
 plus extras.
 
 Definitions (docs/DESIGN.md, "Metrics"):
@@ -116,7 +116,7 @@ def summarize(session: Session) -> dict[str, Any]:
         "realtime_factor": sim_time / session.wall_time if session.wall_time > 0 else None,
         "tick_ms_median": float(np.median(tick)),
         "tick_ms_p99": float(np.percentile(tick, 99)),
-        # further keys (docs/INTERFACES.md, "simulate JSON", the further keys):
+        # further keys (docs/REFERENCE.md, "simulate JSON", the further keys):
         "fall_reason": session.fall_reason,
         "servo_saturation_substeps": int(world.saturated_substeps),
         "speed_limited_ticks": int(session.speed_limited_ticks),

@@ -33,7 +33,7 @@ DEFAULT_OUT = Path("sweep")
 
 
 def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
-    """The ``sweep`` options (docs/INTERFACES.md) on ``parser``; :func:`sweep_main` reads them."""
+    """The ``sweep`` options (docs/REFERENCE.md) on ``parser``; :func:`sweep_main` reads them."""
     parser.add_argument(
         "--grid",
         type=Path,

@@ -1,6 +1,6 @@
 """The HTTP API (FastAPI): thin routes that write intent and read published frames.
 
-Routes (docs/INTERFACES.md, "HTTP API"): ``GET /api/health``; ``GET``/``PUT /api/params``;
+Routes (docs/REFERENCE.md, "HTTP API"): ``GET /api/health``; ``GET``/``PUT /api/params``;
 ``POST /api/sim/pause|resume|reset|step|seek|push`` (and ``PUT /api/sim/speed``);
 ``GET /api/state``; ``GET /api/horizon``; ``POST /api/runs`` and ``GET /api/runs/{id}``;
 ``GET /api/recording`` (the last seconds as a file that plays back without the server);
