@@ -27,13 +27,13 @@ __all__ = [
     "warnings_for",
 ]
 
-# Longest steps walked cleanly on this model, 0.01 m apart (`pelvic-walk simulate --method M
-# --step-length L`, 10 steps of 1.2 s, the defaults of 2026-12-01: lateral distance
-# `current`): fixed 0.37 (0.38: kappa of the legs 5.6e3), redundancy 0.43 (0.44: landing error
-# 3.7 cm), mpc 0.44 (0.45: 17 IK ticks at the speed limit). Beyond them a method does not walk
-# cleanly at the default timing. The single source of "our limits" for the lessons, the
-# analysis view and the warnings.
-CLEAN_LIMIT_M = {"fixed": 0.37, "redundancy": 0.43, "mpc": 0.44}
+# Longest steps walked cleanly on this model, 0.01 m apart (the reference report's "Longest
+# step": `pelvic-walk simulate --method M --step-length L`, 10 steps of 1.2 s, the defaults):
+# fixed 0.37 (0.38: kappa of the legs 2.3e8, 25 IK ticks at the speed limit), redundancy 0.43
+# (0.44: landing error 3.1 cm), mpc 0.43 (0.44: kappa of the legs 4.5e5, 20 IK ticks at the
+# speed limit). Beyond them a method does not walk cleanly at the default timing. The single
+# source of "our limits" for the lessons, the analysis view and the warnings.
+CLEAN_LIMIT_M = {"fixed": 0.37, "redundancy": 0.43, "mpc": 0.43}
 PAPER_LIMIT_M = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
 
 # The paper's scenarios, in one place: parameter groups to change (others keep their value)
@@ -41,9 +41,9 @@ PAPER_LIMIT_M = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
 # --step-length L` (10 steps of 1.2 s, arms on):
 #   0.30 m: every method clean.
 #   0.40 m: fixed completes 10/10 steps but not cleanly: its swing knee straightens
-#           (kappa of the legs ~1e9, reach 0.99+) and 36 IK ticks sit at the joint-speed
-#           limit; mpc clean (kappa 40, waist 25 deg).
-#   0.42 m: fixed falls in its second step (3.08 s, torso tilted over 30 deg); mpc clean.
+#           (kappa of the legs ~1e9, reach 0.99+) and 33 IK ticks sit at the joint-speed
+#           limit; mpc clean (kappa 47, waist 25 deg).
+#   0.42 m: fixed falls in its second step (3.13 s, torso tilted over 30 deg); mpc clean.
 PRESETS: dict[str, dict[str, Any]] = {  # button label (short: it must read whole) -> preset
     "0.30 m: every robot clean": {
         "walk": {"step_length": 0.30, "step_time": 1.2},
