@@ -18,12 +18,14 @@ from typing import Literal
 from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from app.live.intent import DEFAULT_METHODS
+
 # Robots a core keeps at 1.0x with the web process and 20 viewers on the same machine, measured
 # with `serve --sessions private` + `loadtest --viewers 20` (docs/PERFORMANCE.md, "Capacity":
 # 9 robots held on 2 cores, 12 did not). `pelvic-walk bench`'s paced figure (8-13 robot loops
 # a core) leaves out the viewers, the frames and the hand-offs.
 ROBOTS_PER_CORE = 4.5
-SESSION_ROBOTS = 3  # a session's robots by default (the demo's three methods)
+SESSION_ROBOTS = len(DEFAULT_METHODS)  # a session's robots by default (the demo's)
 MAX_DEFAULT_WORKERS = 16  # each worker holds MuJoCo and Pinocchio (~130 MB resident)
 
 
