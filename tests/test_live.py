@@ -241,6 +241,22 @@ def test_a_finished_plan_restarts_every_robot_together(running):
     assert sim.intent.auto_restarts == 1
 
 
+def test_a_frame_that_shows_a_walk_finished_has_counted_it():
+    """The session restarts every robot from the first frame that shows them all finished, and
+    the loop applies that restart before its next tick: the walk must already be counted then
+    (it was counted one tick late, and a restart in between lost it)."""
+    wall = FakeWallClock()
+    intent = dataclasses.replace(initial_intent(short_params(1), ["fixed"]), anchor=(0.0, 0.0))
+    frames: list = []
+    loop = LiveLoop(  # a frame every tick: the first one that shows the robot finished
+        lambda: intent, frames.append, clock=wall.clock, sleep=wall.sleep, publish_hz=1e6
+    )
+    while not frames or not frames[-1].robots[0].finished:
+        loop.iterate()
+    assert frames[-1].robots[0].walks_completed == 1
+    assert frames[-1].robots[0].last_walk_success is True
+
+
 def test_a_fallen_robot_lies_marked_until_every_robot_restarts_together(running):
     sim = running(params=short_params(6), methods=["fixed", "mpc"], speed=4.0)
     _started(sim)

@@ -367,10 +367,17 @@ class LiveLoop:
         except Exception as exc:  # noqa: BLE001 - one robot's failure must not stop the loop
             log.exception("robot %s: controller tick failed", robot.method)
             robot.error = f"{type(exc).__name__}: {exc}"
-        if robot.fell:  # marked at once: a frame never shows a fall without its time
+        # marked at once: a frame never shows a fall without its time, nor a finished walk
+        # uncounted (the session restarts every robot from the frame that shows them all
+        # finished, and the restart can be applied before this robot's next tick)
+        if robot.fell:
             robot.fell_clock = self.clock + params.control_dt
             robot.falls += 1
             robot.last_walk_success = False
+        elif s.walker.finished:
+            robot.finished_clock = self.clock + params.control_dt
+            robot.walks_completed += 1
+            robot.last_walk_success = True
 
     @staticmethod
     def _hold(robot: _Robot) -> None:
