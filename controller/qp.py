@@ -10,12 +10,15 @@ Two back-ends:
   because the default 1e-3 leaves errors of tens of percent on our small QPs. Polishing is
   off by default: OSQP 1.1 prints "Polishing not needed" on stdout at every solve without an
   active constraint, even with verbose=False, which floods a 200 Hz loop's console.
-- ``"daqp"``: DAQP, an exact dual active-set solver for small dense QPs. One ``daqp.Model``
+- ``"daqp"``: DAQP, an exact dual active-set solver for small dense QPs. One DAQP workspace
   per solver: set up once (Cholesky factor of P, constraint matrix), then each tick only the
   vectors are updated and the last active set is the warm start; P or A are refactored only
-  when they change. (Answering with the unconstrained optimum -P^-1 q when it is feasible,
-  which it is on most ticks, was tried: in numpy it costs more instructions than DAQP's warm
-  start, 4.57 vs 4.32 M per closed-loop tick under callgrind.)
+  when they change. DAQP's C functions are called from a compiled kernel (the section "DAQP's
+  C API" below), the same calls in the same order as the ``daqp.Model`` of its Python
+  package, whose per-call conversions cost more than DAQP's own work on these QPs.
+  (Answering with the unconstrained optimum -P^-1 q when it is feasible, which it is on most
+  ticks, was tried: in numpy it costs more instructions than DAQP's warm start, 4.57 vs
+  4.32 M per closed-loop tick under callgrind.)
 
 Constant matrices are tracked by *identity*, and only read-only ones: a layer that keeps P or
 A constant freezes it once per parameter change (:func:`frozen`) and passes the same array
@@ -29,13 +32,17 @@ back (holds its last command) and counts the failure.
 
 from __future__ import annotations
 
+import ctypes
 import math
+import weakref
 from typing import NamedTuple
 
 import daqp
+import llvmlite.binding
 import numpy as np
 import osqp
 import scipy.sparse as sp
+from numba import types
 
 from controller.jit import kernel
 
@@ -47,29 +54,159 @@ _INVALID = "infeasible bounds or non-finite data"
 _EQUALITY = 5  # DAQP's sense of an equality row (l = u)
 
 
-@kernel
-def _daqp_vectors(q, l, u, bu, bl, eq):  # pragma: no cover - compiled
-    """Check a QP's vectors and write DAQP's bounds; returns -1 if ``q`` is not finite or a
-    bound pair is crossed (l > u + 1e-9), else 1 if the equality rows changed, else 0.
+# -- DAQP's C API ---------------------------------------------------------------------------
+# daqp.Model (DAQP's Python package) wraps three C functions: Model.setup calls
+# setup_daqp(problem, work, &setup_time), Model.update daqp_update_ldp(mask, work, problem),
+# Model.solve daqp_solve(result, work). Its Python side (argument conversion, an info dict and
+# two copies per solve) cost 2-3 us a call, more than DAQP's own work on most of our QPs. The
+# kernel below makes the same calls in the same order, on buffers a _DaqpWork owns, so its
+# solutions equal Model's bit for bit (tests/test_qp.py replays a walk's QPs through both).
+# The structures are DAQP's DAQPProblem and DAQPResult (its types.h and api.h, unchanged
+# through the versions pyproject.toml admits); the workspace is DAQP's own, zeroed here
+# and freed by DAQP's free functions, as Model does.
+_DAQP = ctypes.CDLL(daqp.__file__)  # the extension module exports DAQP's C functions
+for _name in ("setup_daqp", "daqp_update_ldp", "daqp_solve"):  # resolvable by cached kernels
+    llvmlite.binding.add_symbol(_name, ctypes.cast(getattr(_DAQP, _name), ctypes.c_void_p).value)
+_setup_daqp = types.ExternalFunction(
+    "setup_daqp", types.intc(types.voidptr, types.voidptr, types.voidptr)
+)
+_daqp_update_ldp = types.ExternalFunction(
+    "daqp_update_ldp", types.intc(types.intc, types.voidptr, types.voidptr)
+)
+_daqp_solve = types.ExternalFunction("daqp_solve", types.void(types.voidptr, types.voidptr))
+_UPDATE_H, _UPDATE_A, _UPDATE_F, _UPDATE_BOUNDS, _UPDATE_SENSE = 1, 2, 4, 8, 16  # Model's mask
 
-    ``bu``, ``bl`` (m,) receive min(u, INF), max(l, -INF) (NaN bounds pass through to the
-    solver); ``eq`` (m,) holds which rows are equalities (|u - l| < 1e-12), updated in place.
+
+class _DaqpProblem(ctypes.Structure):  # DAQP's DAQPProblem
+    _fields_ = [
+        ("n", ctypes.c_int),
+        ("m", ctypes.c_int),
+        ("ms", ctypes.c_int),  # simple bounds: none here (A holds every row)
+        ("H", ctypes.c_void_p),
+        ("f", ctypes.c_void_p),
+        ("A", ctypes.c_void_p),
+        ("bupper", ctypes.c_void_p),
+        ("blower", ctypes.c_void_p),
+        ("sense", ctypes.c_void_p),
+        ("break_points", ctypes.c_void_p),
+        ("nh", ctypes.c_int),
+        ("problem_type", ctypes.c_int),
+    ]
+
+
+class _DaqpResult(ctypes.Structure):  # DAQP's DAQPResult
+    _fields_ = [
+        ("x", ctypes.c_void_p),
+        ("lam", ctypes.c_void_p),
+        ("fval", ctypes.c_double),
+        ("soft_slack", ctypes.c_double),
+        ("exitflag", ctypes.c_int),
+        ("iter", ctypes.c_int),
+        ("nodes", ctypes.c_int),
+        ("solve_time", ctypes.c_double),
+        ("setup_time", ctypes.c_double),
+    ]
+
+
+_EXITFLAG = _DaqpResult.exitflag.offset // 4  # as an index of the result's int32 view
+_WORKSPACE_BYTES = 4096  # zeroed room for DAQPWorkspace (a few hundred bytes)
+_libc = ctypes.CDLL(None)
+_libc.calloc.restype = ctypes.c_void_p
+_libc.calloc.argtypes = [ctypes.c_size_t, ctypes.c_size_t]
+_libc.free.argtypes = [ctypes.c_void_p]
+for _name in ("free_daqp_workspace", "free_daqp_ldp", "allocate_daqp_settings"):
+    getattr(_DAQP, _name).argtypes = [ctypes.c_void_p]
+
+
+def _free_workspace(work: int) -> None:
+    """What Model's deallocation does: DAQP frees what it allocated, then the workspace."""
+    _DAQP.free_daqp_workspace(work)
+    _DAQP.free_daqp_ldp(work)
+    _libc.free(work)
+
+
+class _DaqpWork:
+    """A DAQP workspace for QPs of one shape and the buffers its problem points into."""
+
+    def __init__(self, m: int, n: int):
+        self.shape = (m, n)
+        self.H, self.A = np.zeros((n, n)), np.zeros((m, n))
+        self.f, self.x = np.zeros(n), np.zeros(n)
+        self.bu, self.bl, self.lam = np.zeros(m), np.zeros(m), np.zeros(m)
+        self.sense = np.zeros(m, dtype=np.intc)
+        self.eq = np.zeros(m, dtype=np.bool_)  # which rows are equalities (|u - l| < 1e-12)
+        self.setup_time = np.zeros(1)
+        ptr = ctypes.c_void_p
+        self._problem = _DaqpProblem(
+            n, m, 0, *(ptr(a.ctypes.data) for a in (self.H, self.f, self.A, self.bu, self.bl)),
+            ptr(self.sense.ctypes.data), None, 0, 0,
+        )  # fmt: skip
+        self.problem = ctypes.addressof(self._problem)
+        # the result's memory as int32s (the kernel reads the exitflag), the structure on it
+        self.result = np.zeros(ctypes.sizeof(_DaqpResult) // 4, dtype=np.int32)
+        result = _DaqpResult.from_address(self.result.ctypes.data)  # self.result keeps it
+        result.x, result.lam = self.x.ctypes.data, self.lam.ctypes.data
+        self.work = _libc.calloc(1, _WORKSPACE_BYTES)
+        if not self.work:
+            raise MemoryError("DAQP workspace")
+        self._finalizer = weakref.finalize(self, _free_workspace, self.work)
+
+    def failed_setup(self) -> None:
+        """After a failed setup_daqp: settings as Model restores them (DAQP freed its own)."""
+        _DAQP.allocate_daqp_settings(self.work)
+
+
+@kernel
+def _daqp_call(q, l, u, eq, f, bu, bl, sense, x, out, mask, setup, work, problem, result, t):
+    """One DAQP solve of min 1/2 x'Hx + q'x, l <= Ax <= u on the workspace ``work``.
+
+    Checks the vectors (q finite, no bound pair crossed beyond 1e-9), writes DAQP's bounds
+    (min(u, INF), max(l, -INF); NaN passes to the solver) and f = q, marks the equality rows
+    ``eq`` (DAQP's sense 5), then: with ``setup``, setup_daqp on H and A as they are;
+    otherwise daqp_update_ldp with ``mask`` (H, A) plus the vectors, plus the senses if an
+    equality row changed (else DAQP keeps its working set: the warm start). Then daqp_solve
+    and the solution copied to ``out``.
+
+    Returns (status, flag): 0 solved; -1 invalid vectors; -2 setup or update failed (its
+    flag); -3 exitflag < 1 or a non-finite solution (the exitflag).
     """
     for i in range(q.shape[0]):
         if not math.isfinite(q[i]):
-            return -1
-    changed = 0
+            return -1, 0
+    changed = setup
     for i in range(l.shape[0]):
         gap = u[i] - l[i]
         if gap < -1e-9:
-            return -1
+            return -1, 0
         bu[i] = INF if u[i] > INF else u[i]
         bl[i] = -INF if l[i] < -INF else l[i]
         is_eq = abs(gap) < 1e-12
         if eq[i] != is_eq:
             eq[i] = is_eq
-            changed = 1
-    return changed
+            changed = True
+    for i in range(q.shape[0]):
+        f[i] = q[i]
+    if changed:
+        for i in range(eq.shape[0]):
+            sense[i] = _EQUALITY if eq[i] else 0
+    if setup:
+        flag = _setup_daqp(problem, work, t.ctypes.data)
+    else:
+        mask |= _UPDATE_F | _UPDATE_BOUNDS
+        if changed:
+            mask |= _UPDATE_SENSE
+        flag = _daqp_update_ldp(mask, work, problem)
+    if flag < 0:
+        return -2, flag
+    _daqp_solve(result.ctypes.data, work)
+    exitflag = result[_EXITFLAG]
+    if exitflag < 1:
+        return -3, exitflag
+    for i in range(x.shape[0]):
+        if not math.isfinite(x[i]):
+            return -3, exitflag
+        out[i] = x[i]
+    return 0, exitflag
 
 
 def frozen(a: np.ndarray) -> np.ndarray:
@@ -81,15 +218,6 @@ def frozen(a: np.ndarray) -> np.ndarray:
 def _same(new: np.ndarray, old: np.ndarray | None) -> bool:
     """True if ``new`` is the read-only matrix the solver already has."""
     return new is old and not new.flags.writeable
-
-
-def _buffer(a: np.ndarray) -> np.ndarray:
-    """A C-contiguous writable float array (DAQP's buffers must be writable; copies frozen
-    matrices, which it only receives when they change)."""
-    flags = a.flags
-    if flags.c_contiguous and flags.writeable and a.dtype == np.float64:
-        return a  # what the layers' kernels build every tick (np.require costs more)
-    return np.array(a, dtype=float, order="C")
 
 
 class QP(NamedTuple):
@@ -128,15 +256,12 @@ class QpSolver:
 
     def reset(self) -> None:
         self._solver: osqp.OSQP | None = None
-        self._daqp = None  # daqp.Model
+        self._daqp: _DaqpWork | None = None
         self._shape: tuple[int, int] | None = None
         self._P_pattern: _Pattern | None = None
         self._A_pattern: _Pattern | None = None
         self._P_obj: np.ndarray | None = None  # the P / A last handed to the solver
         self._A_obj: np.ndarray | None = None
-        # DAQP's bounds and which rows are equalities, written by _daqp_vectors each solve
-        self._bu = self._bl = np.empty(0)
-        self._eq = np.zeros(0, dtype=np.bool_)
         self.x_prev: np.ndarray | None = None
         self.failures = 0
 
@@ -188,58 +313,40 @@ class QpSolver:
 
     # -- DAQP ------------------------------------------------------------------------------
     def _solve_daqp(self, qp: QP) -> tuple[np.ndarray | None, str]:
-        """DAQP on the QP: the vectors checked and turned into DAQP's bounds by one kernel
-        (equality rows, |u - l| < 1e-12, get DAQP's sense 5), P and A checked only when new."""
+        """DAQP on the QP through :func:`_daqp_call`: P and A copied to the workspace (and
+        checked) only when new, the vectors every call."""
         P, q, A, l, u = qp
-        model = self._daqp
-        if model is None or self._shape != A.shape:
-            m = A.shape[0]
-            self._bu, self._bl, self._eq = np.empty(m), np.empty(m), np.zeros(m, dtype=np.bool_)
-            model = None
-        new_P, new_A = not _same(P, self._P_obj), not _same(A, self._A_obj)
-        vectors = _daqp_vectors(q, l, u, self._bu, self._bl, self._eq)
-        if (
-            vectors < 0
-            or (new_P and not math.isfinite(_sum(P, None)))
-            or (new_A and not math.isfinite(_sum(A, None)))
+        work = self._daqp
+        setup = work is None or work.shape != A.shape
+        new_P, new_A = setup or not _same(P, self._P_obj), setup or not _same(A, self._A_obj)
+        if (new_P and not math.isfinite(_sum(P, None))) or (
+            new_A and not math.isfinite(_sum(A, None))
         ):
             return None, _INVALID
-        bu, bl = self._bu, self._bl
-        if model is None:
-            model = daqp.Model()
-            flag, _ = model.setup(
-                _buffer(P), np.ascontiguousarray(q, dtype=float), _buffer(A), bu, bl, self._sense()
-            )
-            if flag < 0:
-                return None, f"daqp setup flag {flag}"
-            self._daqp, self._shape = model, A.shape
-            self._P_obj, self._A_obj = P, A
-        elif not (new_P or new_A or vectors):
-            # the usual tick: new vectors only (P and A are the frozen ones already factored)
-            flag = model.update(f=q, bupper=bu, blower=bl)
-            if flag < 0:
-                return None, f"daqp update flag {flag}"
-        else:
-            kw: dict[str, np.ndarray] = {}
-            if new_P:
-                kw["H"] = _buffer(P)
-                self._P_obj = P
-            if new_A:
-                kw["A"] = _buffer(A)
-                self._A_obj = A
-            if vectors:  # the equality rows changed; else keep the working set: the warm start
-                kw["sense"] = self._sense()
-            flag = model.update(f=q, bupper=bu, blower=bl, **kw)
-            if flag < 0:
-                return None, f"daqp update flag {flag}"
-        x, _fval, exitflag, _info = model.solve()
-        if exitflag < 1 or not math.isfinite(_sum(x)):
-            return None, f"daqp exitflag {exitflag}"
+        if setup:
+            work = self._daqp = _DaqpWork(*A.shape)
+        assert work is not None
+        mask = 0
+        if new_P:
+            work.H[...] = P
+            self._P_obj, mask = P, mask | _UPDATE_H
+        if new_A:
+            work.A[...] = A
+            self._A_obj, mask = A, mask | _UPDATE_A
+        x = np.empty(work.shape[1])
+        status, flag = _daqp_call(
+            q, l, u, work.eq, work.f, work.bu, work.bl, work.sense, work.x, x, mask, setup,
+            work.work, work.problem, work.result, work.setup_time,
+        )  # fmt: skip
+        if status == -1:
+            return None, _INVALID
+        if status == -2:
+            if setup:
+                work.failed_setup()
+            return None, f"daqp {'setup' if setup else 'update'} flag {flag}"
+        if status == -3:
+            return None, f"daqp exitflag {flag}"
         return x, "solved"
-
-    def _sense(self) -> np.ndarray:
-        """DAQP's sense flags of the equality rows (a fresh array: DAQP may keep it)."""
-        return self._eq.astype(np.intc) * _EQUALITY
 
     def solve(self, qp: QP) -> QpResult:
         """Solve; on failure return the previous solution (or zeros) with ok=False.
