@@ -81,21 +81,13 @@ class Series:
         self.data[self.count % self.capacity] = row
         self.count += 1
 
-    def append_values(self, values: tuple) -> None:
+    def append_values(self, values: tuple | list) -> None:
         """Append one row given as values in column order."""
         self.data[self.count % self.capacity] = values
         self.count += 1
 
     def new_row(self) -> np.ndarray:
         return np.full(len(self.columns), np.nan)
-
-    def next_row(self) -> np.ndarray:
-        """The buffer's next row (a view, NaN-filled), appended: write it by column index
-        (``row[COL.t] = t``); a column nobody writes stays NaN."""
-        row = self.data[self.count % self.capacity]
-        row.fill(np.nan)
-        self.count += 1
-        return row
 
     def __len__(self) -> int:
         return min(self.count, self.capacity)

@@ -19,9 +19,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.sim.metrics import COL, Series, two_step_windows
+from app.sim.metrics import COL, COLUMNS, Series, two_step_windows
 from app.sim.world import Contacts, World
 from controller.footsteps import FootstepPlan
+from controller.jit import kernel
 from controller.kinematics import RobotKinematics
 from controller.params import ControllerParams
 from controller.walker import TickOutput, Walker
@@ -29,6 +30,18 @@ from models.dyros_jet import ROBOT_XML
 
 GRAVITY = 9.81  # [m/s^2]
 _sum = np.add.reduce  # ndarray.sum without its Python-level wrapper (the same reduction)
+_NAN_ROW = [math.nan] * len(COLUMNS)  # a series row before it is written (a column not
+# written, such as the CoP while airborne, stays NaN)
+
+
+@kernel
+def _lipm_zmp(com, vel, vel_prev, dt, g):
+    """(2,) the ZMP of the LIPM, p - (z / g) a, with the CoM's horizontal acceleration a
+    from its velocities at the end of two consecutive periods dt apart."""
+    zmp = np.empty(2)
+    for i in range(2):
+        zmp[i] = com[i] - (com[2] / g) * ((vel[i] - vel_prev[i]) / dt)
+    return zmp
 
 
 @dataclass(frozen=True)
@@ -206,11 +219,7 @@ class Session:
         # LIPM ZMP's acceleration pairs this period's velocities with this period's CoM.
         yaw_momentum = world.yaw_momentum()
         vel = world.data.subtree_linvel[world.root_id][:2].copy()
-        acc = (
-            np.zeros(2)
-            if self._com_vel_prev is None
-            else (vel - self._com_vel_prev) / world.control_dt
-        )
+        prev = vel if self._com_vel_prev is None else self._com_vel_prev  # at first: no acc
         self._com_vel_prev = vel
         support, inside, margin, tilt = world.support(contacts)
         return Measurement(
@@ -222,15 +231,19 @@ class Session:
             balance_margin=margin,
             sole_tilt=tilt,
             com=com,
-            lipm_zmp=com[:2] - (com[2] / GRAVITY) * acc,
+            lipm_zmp=_lipm_zmp(com, vel, prev, world.control_dt, GRAVITY),
             yaw_momentum=yaw_momentum,
             energy=float(_sum(world.energy_ctrl_per_joint)),
             energy_substep=float(_sum(world.energy_substep_per_joint)),
         )
 
     def _record(self, out: TickOutput, m: Measurement, tick_ms: float) -> None:
-        """One row of the time series (app.sim.metrics.COLUMNS), written by column name."""
-        row, c = self.series.next_row(), COL
+        """One row of the time series (app.sim.metrics.COLUMNS), written by column name.
+
+        The values go into a Python list first (a list item costs a fraction of a numpy
+        element's assignment) and into the series' buffer in one assignment; arrays are read
+        with ``tolist`` (one call, the same float values)."""
+        row, c = _NAN_ROW.copy(), COL
         row[c.t] = m.t
         row[c.waist_angle] = m.waist_angle
         row[c.waist_angle_cmd] = out.waist_angle
@@ -243,22 +256,23 @@ class Session:
         row[c.kappa_legs] = out.kappa_legs
         cop = m.contacts.cop
         if cop is not None:  # else NaN
-            row[c.cop_x], row[c.cop_y] = cop
+            row[c.cop_x], row[c.cop_y] = cop.tolist()
         if m.cop_inside is not None:
             row[c.zmp_in_support] = m.cop_inside
         row[c.balance_margin] = m.balance_margin
         row[c.sole_tilt] = m.sole_tilt
-        row[c.zmp_ref_x], row[c.zmp_ref_y] = out.zmp_ref
-        row[c.lipm_zmp_x], row[c.lipm_zmp_y] = m.lipm_zmp
-        row[c.com_x], row[c.com_y], row[c.com_z] = m.com
-        row[c.com_des_x], row[c.com_des_y] = out.p_world_com_des
-        row[c.reach_left], row[c.reach_right] = out.reach
+        row[c.zmp_ref_x], row[c.zmp_ref_y] = out.zmp_ref.tolist()
+        row[c.lipm_zmp_x], row[c.lipm_zmp_y] = m.lipm_zmp.tolist()
+        row[c.com_x], row[c.com_y], row[c.com_z] = m.com.tolist()
+        row[c.com_des_x], row[c.com_des_y] = out.p_world_com_des.tolist()
+        row[c.reach_left], row[c.reach_right] = out.reach.tolist()
         row[c.energy] = m.energy
         row[c.energy_substep] = m.energy_substep
         row[c.tick_ms] = tick_ms
         row[c.step_index] = out.step_index
         row[c.in_ssp] = out.in_ssp
         row[c.speed_limited] = out.speed_limited
+        self.series.append_values(row)
 
     def _bookkeep(self, out: TickOutput, m: Measurement) -> None:
         """Step starts (energy), landing errors, falls, ZMP and speed-limit counts."""
