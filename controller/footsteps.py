@@ -1,4 +1,5 @@
-"""Layer 1: footstep plan, step phases and the ZMP reference and bounds (paper Sec. III-IV).
+"""Layer 1: footstep plan, step phases, the feet's trajectories (eq. 20-21) and the ZMP
+reference and bounds (paper Sec. III-IV).
 
 The paper takes its ZMP reference as "pre-generated" (Sec. IV-A, used by eq. 18) from the
 footholds P^f_k of eq. (21); it does not spell out the plan. This module writes it down.
@@ -8,7 +9,11 @@ Paper symbols -> code names:
     P^f_{k-1} (prior foot, eq. 21) -> ``FootstepPlan.swing_from[k]``,
     P^f_{k+1} (foothold, eq. 21) -> ``FootstepPlan.swing_to[k]``,
     Z^ref (eq. 18) -> ``PlanSample.zmp_ref``,
-    Z^min / Z^max (eq. 18) -> ``PlanSample.zmp_lo`` / ``zmp_hi`` (:meth:`FootstepPlan.sample`).
+    Z^min / Z^max (eq. 18) -> ``PlanSample.zmp_lo`` / ``zmp_hi`` (:meth:`FootstepPlan.sample`),
+    x_sp (eq. 20, support foot) -> stays at ``FootstepPlan.support_pos[k]`` with zero velocity
+    (``PlanSample.p_left`` / ``p_right`` of the support side),
+    x_sw(t) (eq. 21, swing foot) -> :func:`_swing_point`; t_0 / t_f -> start / end of step
+    k's SSP.
 
 Choices where the paper is vague:
 - Feet start side by side at x = x0, y = +/- step_width / 2, z = 0 (positions are the sole
@@ -39,9 +44,16 @@ Choices where the paper is vague:
   bounding box contains it and is larger only at the corners between the feet. It is the
   simple, per-axis choice the decoupled x / y LIPM QP needs (box bounds per axis); the
   reference itself always lies on the segment between the foot centres, well inside the hull.
+- The swing foot stays on the ground during the DSP and moves during the SSP only, with
+  s = (t - t_0) / (t_f - t_0) in [0, 1]. x and y follow the cubic of eq. (21) with zero velocity
+  at both ends: p = p0 + (p1 - p0) (3 s^2 - 2 s^3). The lift (z, not specified by the paper)
+  is z = h (1 - cos(2 pi s)) / 2 on top of the cubic between the lift-off and touch-down
+  heights: zero velocity at both ends, peak h = ``step_height[k]`` (``WalkParams.foot_height``)
+  at s = 0.5. The feet keep a zero orientation (straight walking), so only positions are
+  sampled; velocities are the analytic time derivatives.
 - Times outside [0, t_end] are clamped. The one query, :meth:`FootstepPlan.sample`, is
-  vectorised over ``times`` (``np.searchsorted`` on ``step_start``), so a tick asks for the
-  present, the next tick and the whole MPC horizon at once.
+  compiled and takes any number of ``times`` (a binary search of ``step_start`` each), so a
+  tick asks for the present, the next tick and the whole MPC horizon at once.
 - :meth:`FootstepPlan.replanned` keeps every step that has started and re-plans the rest with
   new parameters; steps then have their own durations, so the authoritative timing is in the
   per-step arrays ``step_duration``, ``step_dsp`` and ``step_height``; the scalar
@@ -58,19 +70,19 @@ from typing import NamedTuple
 
 import numpy as np
 
+from controller.jit import kernel
 from controller.params import WalkParams
-from controller.swing import swing_state
 from models.dyros_jet import FOOT_SIZE
 
 LEFT, RIGHT = 0, 1
 FINAL_STAND = 1.0  # [s] stand after the ZMP reached the final midpoint
 
-# The per-step table :meth:`FootstepPlan.sample` gathers with one fancy index (one row per
-# step): numpy's per-call overhead dominates on a 16-sample horizon, so one gather of every
-# column beats a gather per array.
+# The per-step table :meth:`FootstepPlan.sample` reads (one row per step, the columns below),
+# so the sampler's kernel finds all of a step in one row.
 _START, _DSP, _DSP_POS, _SSP, _HEIGHT, _SIDE = range(6)  # [s], [s], [s] (> 0), [s] (> 0), [m]
-_FROM, _TO, _SUPPORT = slice(6, 9), slice(9, 12), slice(12, 15)  # (3,) [m] each
-_ZMP_FROM = slice(15, 17)  # (2,) [m]
+_FROM_0, _TO_0, _SUPPORT_0 = 6, 9, 12  # the first of 3 columns each: lift-off point, foothold,
+# support foot [m]
+_ZMP_FROM_0 = 15  # the first of 2 columns: the ZMP reference at the step's start [m]
 _DSP_END_POS = 17  # [s] (> 0) the DSP after the touch-down (both_ends)
 _COLUMNS = 18
 
@@ -199,70 +211,22 @@ class FootstepPlan:
             times: [s] query times.
             margin: [m] distance the ZMP box keeps from the foot edges (eq. 18 bounds).
         """
-        t = np.minimum(np.maximum(np.atleast_1d(np.asarray(times, dtype=float)), 0.0), self.t_end)
-        idx = np.searchsorted(self.step_start, t, side="right") - 1
-        after = t >= self.walk_end
-        idx[after] = self.n
-        before = idx < 0
-        k = np.minimum(np.maximum(idx, 0), self.n - 1)
-        rows = self._table[k]  # (N, 18)
-        dsp, ssp, side = rows[:, _DSP], rows[:, _SSP], rows[:, _SIDE]
-        support = rows[:, _SUPPORT]
-        tau = t - rows[:, _START]  # [s] into the step
-        standing = before | after
-        outside = bool(standing.any())
-        walking = ~standing
-        in_ssp = walking & (tau >= dsp) & (tau < dsp + ssp)
-        # eq. (20)-(21): the support foot stays, the swing foot follows the curve of swing.py
-        s = np.minimum(np.maximum((tau - dsp) / ssp, 0.0), 1.0)
-        if outside:
-            s = np.where(before, 0.0, np.where(after, 1.0, s))
-        p_sw, v_sw = swing_state(s, rows[:, _FROM], rows[:, _TO], rows[:, _HEIGHT], ssp)
-        left_swings = (walking & (side == LEFT))[:, None]
-        right_swings = (walking & (side == RIGHT))[:, None]
-        p_left = np.where(left_swings, p_sw, support)
-        p_right = np.where(right_swings, p_sw, support)
-        v_left = np.where(left_swings, v_sw, 0.0)
-        v_right = np.where(right_swings, v_sw, 0.0)
-        # ZMP reference: from the previous support to this one in the DSP, then on it (eq. 18)
-        zmp_from = rows[:, _ZMP_FROM]
-        s_dsp = np.minimum(np.maximum(tau / rows[:, _DSP_POS], 0.0), 1.0)[:, None]
-        ref = zmp_from + s_dsp * (support[:, :2] - zmp_from)
-        if self.has_end_dsp:  # then on to the midpoint of the support and the landed foot
-            s_end = np.clip((tau - dsp - ssp) / rows[:, _DSP_END_POS], 0.0, 1.0)[:, None]
-            ref = ref + s_end * 0.5 * (rows[:, _TO][:, :2] - support[:, :2])
-        if outside:
-            b1, a1 = before[:, None], after[:, None]
-            init, final = self.feet_init, self.feet_final
-            p_left = np.where(b1, init[LEFT], np.where(a1, final[LEFT], p_left))
-            p_right = np.where(b1, init[RIGHT], np.where(a1, final[RIGHT], p_right))
-            ref = np.where(b1, init[:, :2].mean(axis=0), ref)
-            if after.any():  # after the closing step: on to the feet's midpoint, then stay
-                last = self.zmp_at_walk_end
-                s_end = np.clip((t - self.walk_end) / max(self.final_dsp_time, 1e-9), 0.0, 1.0)
-                ref = np.where(a1, last + s_end[:, None] * (final[:, :2].mean(axis=0) - last), ref)
-        # ZMP box: both feet's bounding box, or the support foot alone in the SSP
-        ssp_col = in_ssp[:, None]
-        a = np.where(ssp_col, support[:, :2], p_left[:, :2])
-        b = np.where(ssp_col, support[:, :2], p_right[:, :2])
         half = np.maximum(np.array(FOOT_SIZE) / 2.0 - margin, 0.0)
-        side_i = side.astype(np.intp)
-        return PlanSample(
-            t=t,
-            step=idx,
-            standing=standing,
-            in_dsp=walking & ~in_ssp,
-            in_ssp=in_ssp,
-            swing_side=np.where(walking, side_i, -1),
-            support_side=1 - side_i,
-            s_ssp=s,
-            zmp_ref=ref,
-            zmp_lo=np.minimum(a, b) - half,
-            zmp_hi=np.maximum(a, b) + half,
-            p_left=p_left,
-            v_left=v_left,
-            p_right=p_right,
-            v_right=v_right,
+        final = self.feet_final
+        return PlanSample._make(
+            _sample(
+                np.atleast_1d(np.asarray(times, dtype=float)),
+                self.t_end,
+                self.step_start,
+                self.walk_end,
+                self._table,
+                self.has_end_dsp,
+                self.feet_init,
+                final,
+                self.zmp_at_walk_end,
+                max(self.final_dsp_time, 1e-9),
+                half,
+            )
         )
 
     @cached_property
@@ -319,6 +283,114 @@ class FootstepPlan:
         return _finish(walk, self.t_start, self.feet_init, steps, feet, n_walk - started)
 
 
+@kernel
+def _swing_point(s, p0, p1, height, ssp, p, v):
+    """The swing foot of eq. (21) at SSP progress ``s`` (module docstring): position into
+    ``p`` (3,) [m], velocity into ``v`` (3,) [m/s]. On the ground (s <= 0 or s >= 1) exactly
+    at the lift-off point or the foothold, at rest (the cubic's rounding would leave the
+    landed foot a few 1e-17 m off)."""
+    if s <= 0.0 or s >= 1.0:
+        for a in range(3):
+            p[a] = p1[a] if s >= 1.0 else p0[a]
+            v[a] = 0.0
+        return
+    s2 = s * s
+    blend = 3.0 * s2 - 2.0 * s2 * s  # 3 s^2 - 2 s^3: zero velocity at both ends
+    dblend = (6.0 * s - 6.0 * s2) / ssp
+    for a in range(3):
+        dp = p1[a] - p0[a]
+        p[a] = p0[a] + dp * blend
+        v[a] = dp * dblend
+    two_pi_s = 2.0 * np.pi * s  # the lift: h (1 - cos(2 pi s)) / 2, peak h at s = 0.5
+    p[2] = p[2] + height * (1.0 - np.cos(two_pi_s)) / 2.0
+    v[2] = v[2] + height * np.pi * np.sin(two_pi_s) / ssp
+
+
+@kernel
+def _clamp(x, lo, hi):
+    """min(max(x, lo), hi), NaN kept (numpy's minimum / maximum / clip)."""
+    if x != x:
+        return x
+    x = x if x > lo else lo
+    return x if x < hi else hi
+
+
+@kernel
+def _sample(times, t_end, step_start, walk_end, table, has_end_dsp, init, final, zmp_end,
+            final_dsp, half):  # fmt: skip
+    """The arrays of :class:`PlanSample` at ``times`` (:meth:`FootstepPlan.sample`), one
+    time after the other: the step in progress (a binary search of the step starts), its
+    row of the plan's table, the phase, the feet of eq. (20)-(21) and the ZMP reference and
+    box of eq. (18)."""
+    N, n = times.shape[0], step_start.shape[0]
+    t_out = np.empty(N)
+    step = np.empty(N, np.int64)
+    standing = np.empty(N, np.bool_)
+    in_dsp = np.empty(N, np.bool_)
+    in_ssp = np.empty(N, np.bool_)
+    swing_side = np.empty(N, np.int64)
+    support_side = np.empty(N, np.int64)
+    s_ssp = np.empty(N)
+    zmp_ref, zmp_lo, zmp_hi = np.empty((N, 2)), np.empty((N, 2)), np.empty((N, 2))
+    p_left, v_left = np.empty((N, 3)), np.empty((N, 3))
+    p_right, v_right = np.empty((N, 3)), np.empty((N, 3))
+    p_sw, v_sw = np.empty(3), np.empty(3)
+    for i in range(N):
+        t = _clamp(times[i], 0.0, t_end)
+        idx = np.searchsorted(step_start, t, side="right") - 1
+        after = t >= walk_end
+        if after:
+            idx = n
+        before = idx < 0
+        row = table[min(max(idx, 0), n - 1)]
+        dsp, ssp, side = row[_DSP], row[_SSP], int(row[_SIDE])
+        tau = t - row[_START]  # [s] into the step
+        walking = not (before or after)
+        ssp_now = walking and tau >= dsp and tau < dsp + ssp
+        s = 0.0 if before else (1.0 if after else _clamp((tau - dsp) / ssp, 0.0, 1.0))
+        # eq. (20)-(21): the support foot stays, the swing foot follows the curve of swing
+        p0, p1 = row[_FROM_0 : _FROM_0 + 3], row[_TO_0 : _TO_0 + 3]
+        _swing_point(s, p0, p1, row[_HEIGHT], ssp, p_sw, v_sw)
+        for a in range(3):
+            if before:
+                p_left[i, a], p_right[i, a] = init[LEFT, a], init[RIGHT, a]
+            elif after:
+                p_left[i, a], p_right[i, a] = final[LEFT, a], final[RIGHT, a]
+            else:
+                p_left[i, a] = p_sw[a] if side == LEFT else row[_SUPPORT_0 + a]
+                p_right[i, a] = p_sw[a] if side == RIGHT else row[_SUPPORT_0 + a]
+            v_left[i, a] = v_sw[a] if walking and side == LEFT else 0.0
+            v_right[i, a] = v_sw[a] if walking and side == RIGHT else 0.0
+        # ZMP reference: from the previous support to this one in the DSP, then on it (eq. 18)
+        s_dsp = _clamp(tau / row[_DSP_POS], 0.0, 1.0)
+        s_end = _clamp((tau - dsp - ssp) / row[_DSP_END_POS], 0.0, 1.0)
+        s_final = _clamp((t - walk_end) / final_dsp, 0.0, 1.0)
+        for a in range(2):
+            z0, sup = row[_ZMP_FROM_0 + a], row[_SUPPORT_0 + a]
+            ref = z0 + s_dsp * (sup - z0)
+            if has_end_dsp:  # then on to the midpoint of the support and the landed foot
+                ref = ref + s_end * 0.5 * (row[_TO_0 + a] - sup)
+            if before:  # the feet's midpoint
+                ref = (init[LEFT, a] + init[RIGHT, a]) / 2.0
+            elif after:  # after the closing step: on to the feet's midpoint, then stay
+                mid = (final[LEFT, a] + final[RIGHT, a]) / 2.0
+                ref = zmp_end[a] + s_final * (mid - zmp_end[a])
+            zmp_ref[i, a] = ref
+            # ZMP box: both feet's bounding box, or the support foot alone in the SSP
+            lo_a = sup if ssp_now else p_left[i, a]
+            hi_a = sup if ssp_now else p_right[i, a]
+            if hi_a < lo_a:
+                lo_a, hi_a = hi_a, lo_a
+            zmp_lo[i, a] = lo_a - half[a]
+            zmp_hi[i, a] = hi_a + half[a]
+        t_out[i], step[i], standing[i] = t, idx, not walking
+        in_dsp[i], in_ssp[i], s_ssp[i] = walking and not ssp_now, ssp_now, s
+        swing_side[i] = side if walking else -1
+        support_side[i] = 1 - side
+    return (t_out, step, standing, in_dsp, in_ssp, swing_side, support_side, s_ssp, zmp_ref,
+            zmp_lo, zmp_hi, p_left, v_left, p_right, v_right)  # fmt: skip
+
+
 TICK_BLOCK = 100  # ticks a :class:`TickSamples` covers (0.5 s at 200 Hz)
 
 
@@ -326,8 +398,9 @@ class TickSamples:
     """The plan's samples for the next ``n_ticks`` control ticks, taken ahead in one call.
 
     A tick at time t reads the plan at t (phase, anchoring), t + dt (foot targets) and the
-    MPC horizon t + offsets (N samples): N + 2 queries of :meth:`FootstepPlan.sample`, some
-    60 numpy calls on a handful of rows. Here one call of that same sampler fills the rows of
+    MPC horizon t + offsets (N samples): N + 2 times of :meth:`FootstepPlan.sample`, whose
+    call (15 arrays returned) costs more than its work on so few. Here one call of that same
+    sampler fills the rows of
     ``n_ticks`` ticks at once, and a tick's rows are then one index (:meth:`at`), with the
     values the tick would have sampled itself, bit for bit: the times are the walker's own
     (its clock advances by ``t += dt``, reproduced by a sequential sum) and every row of

@@ -61,8 +61,8 @@ _EQUALITY = 5  # DAQP's sense of an equality row (l = u)
 # two copies per solve) cost 2-3 us a call, more than DAQP's own work on most of our QPs. The
 # kernel below makes the same calls in the same order, on buffers a _DaqpWork owns, so its
 # solutions equal Model's bit for bit (tests/test_qp.py replays a walk's QPs through both).
-# The structures are DAQP's DAQPProblem and DAQPResult (its types.h and api.h, unchanged
-# through the versions pyproject.toml admits); the workspace is DAQP's own, zeroed here
+# The structures are DAQP's DAQPProblem and DAQPResult (its types.h and api.h; pyproject.toml
+# admits the minor version this was tested with); the workspace is DAQP's own, zeroed here
 # and freed by DAQP's free functions, as Model does.
 _DAQP = ctypes.CDLL(daqp.__file__)  # the extension module exports DAQP's C functions
 for _name in ("setup_daqp", "daqp_update_ldp", "daqp_solve"):  # resolvable by cached kernels

@@ -1,8 +1,8 @@
 """The plan's one sampler against a slow, written-out reference at random times.
 
 The reference below walks the step list one instant at a time in plain Python, from the
-definitions in the docstrings of controller/footsteps.py and controller/swing.py (it shares
-no code with the sampler), so any shortcut the vectorised sampler takes is checked.
+definitions in the docstring of controller/footsteps.py (it shares no code with the
+sampler), so any shortcut the compiled sampler takes is checked.
 """
 
 from __future__ import annotations
