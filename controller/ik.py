@@ -217,6 +217,23 @@ def pose_error(T_cur: np.ndarray, T_des: np.ndarray) -> np.ndarray:
     return _pose_error(np.asarray(T_cur, dtype=float), *_rotation_and_position(T_des))
 
 
+def flat_foot_velocity_command(
+    T_cur_left: np.ndarray,
+    p_des_left: np.ndarray,
+    v_ff_left: np.ndarray,
+    T_cur_right: np.ndarray,
+    p_des_right: np.ndarray,
+    v_ff_right: np.ndarray,
+    gain: float,
+) -> np.ndarray:
+    """:func:`foot_velocity_command` for flat feet given by their desired positions (3,), the
+    walker's case, with float arrays taken as they are (no conversions: once a tick)."""
+    return _foot_twists(
+        T_cur_left, _FLAT, p_des_left, v_ff_left, T_cur_right, _FLAT, p_des_right, v_ff_right,
+        float(gain),
+    )  # fmt: skip
+
+
 def foot_velocity_command(
     T_cur_left: np.ndarray,
     T_des_left: np.ndarray,

@@ -318,7 +318,9 @@ class QpSolver:
         P, q, A, l, u = qp
         work = self._daqp
         setup = work is None or work.shape != A.shape
-        new_P, new_A = setup or not _same(P, self._P_obj), setup or not _same(A, self._A_obj)
+        # _same inlined (this runs four times a tick)
+        new_P = setup or P is not self._P_obj or P.flags.writeable
+        new_A = setup or A is not self._A_obj or A.flags.writeable
         if (new_P and not math.isfinite(_sum(P, None))) or (
             new_A and not math.isfinite(_sum(A, None))
         ):

@@ -47,7 +47,7 @@ from controller.footsteps import (
     TickSamples,
     plan_footsteps,
 )
-from controller.ik import build_ik, foot_velocity_command, solve_ik
+from controller.ik import build_ik, flat_foot_velocity_command, solve_ik
 from controller.jit import kernel
 from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
 from controller.params import ControllerParams, horizon_samples
@@ -285,7 +285,7 @@ class Walker:
             self.p_world_pelvis_des,
             v_world_pelvis,
         )
-        v_des = foot_velocity_command(  # flat feet: desired poses given as positions
+        v_des = flat_foot_velocity_command(  # flat feet: desired poses given as positions
             ks.T_pelvis_left_sole,
             p_des_l,
             v_ff_l,
