@@ -84,7 +84,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=int,
         default=None,
         help="worker processes running the robots (default: as many as fill the machine's "
-        "capacity, 4.5 robots a core, with 3 robots each: 3 on 2 cores; 0: in this process)",
+        "capacity, 6 robots a core, with 3 robots each: 4 on 2 cores; 0: in this process)",
     )
     p.add_argument(
         "--sessions",
@@ -98,7 +98,7 @@ def build_parser() -> argparse.ArgumentParser:
         type=positive_int,
         default=None,
         help="robots one worker runs at once (default: 3, a session's robots, or the capacity "
-        "of 4.5 robots a core shared out over the --workers given; a worker's robots share one "
+        "of 6 robots a core shared out over the --workers given; a worker's robots share one "
         "core)",
     )
     p.add_argument(

@@ -2,7 +2,7 @@
 
 Processes and threads (the machine may have only two cores):
 
-- **worker processes** (``--workers`` x ``--robots-per-worker``, by default 4.5 robots a core
+- **worker processes** (``--workers`` x ``--robots-per-worker``, by default 6 robots a core
   in workers of 3 robots: ``app.web.settings.worker_layout``; ``app.live.pool``) run the live
   sessions, each paced to real time, and send their frames back; with ``--workers 0`` the
   shared session runs in a thread of this process instead;

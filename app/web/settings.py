@@ -22,9 +22,11 @@ from app.live.intent import DEFAULT_METHODS
 
 # Robots a core keeps at 1.0x with the web process and 20 viewers on the same machine, measured
 # with `serve --sessions private` + `loadtest --viewers 20` (docs/PERFORMANCE.md, "Capacity":
-# 9 robots held on 2 cores, 12 did not). `pelvic-walk bench`'s paced figure (8-13 robot loops
-# a core) leaves out the viewers, the frames and the hand-offs.
-ROBOTS_PER_CORE = 4.5
+# 18 robots held on 2 cores, 21 did not): two thirds of that, so that a slower hour of the host
+# (MuJoCo alone reads 50-77 x real time on the development machine) still keeps real time.
+# `pelvic-walk bench`'s paced figure (11-22 robot loops a core) leaves out the viewers, the
+# frames and the hand-offs.
+ROBOTS_PER_CORE = 6
 SESSION_ROBOTS = len(DEFAULT_METHODS)  # a session's robots by default (the demo's)
 MAX_DEFAULT_WORKERS = 16  # each worker holds MuJoCo and Pinocchio (~130 MB resident)
 
@@ -36,8 +38,8 @@ def worker_layout(workers: int | None, robots_per_worker: int | None) -> tuple[i
     turns on one core (Python's GIL), so by default a worker holds a session's worth of robots
     (SESSION_ROBOTS) and there are as many workers as the capacity fills (at most
     MAX_DEFAULT_WORKERS): the pool spreads a session's robots over the workers and the
-    operating system the workers over the cores. On 2 cores: 3 workers x 3 robots, the demo and
-    two private sessions of three. Given only ``workers``, they share the capacity out; given
+    operating system the workers over the cores. On 2 cores: 4 workers x 3 robots, the demo and
+    three private sessions of three. Given only ``workers``, they share the capacity out; given
     only ``robots_per_worker``, the capacity decides the workers; 0 workers run the robots in
     the web process.
     """
