@@ -51,6 +51,7 @@ INF = 1e20  # OSQP's infinity; DAQP takes the same large bound
 _sum = np.add.reduce
 _fmin = np.fmin.reduce  # the smallest value, NaNs ignored
 _INVALID = "infeasible bounds or non-finite data"
+_SIZES = "the sizes of P, q, l and u do not match A"
 _EQUALITY = 5  # DAQP's sense of an equality row (l = u)
 
 
@@ -321,6 +322,9 @@ class QpSolver:
         # _same inlined (this runs four times a tick)
         new_P = setup or P is not self._P_obj or P.flags.writeable
         new_A = setup or A is not self._A_obj or A.flags.writeable
+        m, n = A.shape
+        if q.shape != (n,) or l.shape != (m,) or u.shape != (m,) or P.shape != (n, n):
+            return None, _SIZES  # the kernel writes the workspace's buffers by these sizes
         if (new_P and not math.isfinite(_sum(P, None))) or (
             new_A and not math.isfinite(_sum(A, None))
         ):
@@ -335,7 +339,7 @@ class QpSolver:
         if new_A:
             work.A[...] = A
             self._A_obj, mask = A, mask | _UPDATE_A
-        x = np.empty(work.shape[1])
+        x = np.empty(n)
         status, flag = _daqp_call(
             q, l, u, work.eq, work.f, work.bu, work.bl, work.sense, work.x, x, mask, setup,
             work.work, work.problem, work.result, work.setup_time,

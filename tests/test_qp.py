@@ -117,3 +117,17 @@ def test_daqp_failures_fall_back_and_the_next_solve_recovers():
         again = solver.solve(good)
         assert again.ok and np.array_equal(again.x, first.x)
     assert solver.failures == 3
+
+
+def test_daqp_refuses_vectors_of_the_wrong_size():
+    """A q, l or u whose size does not match A fails cleanly (the kernel writes DAQP's
+    buffers by these sizes: it is never called with them)."""
+    A = frozen(np.eye(2))
+    solver = QpSolver("daqp")
+    good = _qp(np.eye(2), A)
+    assert solver.solve(good).ok
+    for bad in (good._replace(q=np.ones(5)), good._replace(l=np.zeros(1)),
+                good._replace(u=np.ones(3)), good._replace(P=np.eye(3))):  # fmt: skip
+        r = solver.solve(bad)
+        assert not r.ok and "do not match" in r.status
+    assert solver.solve(good).ok and solver.failures == 4
