@@ -212,7 +212,6 @@ class FootstepPlan:
             margin: [m] distance the ZMP box keeps from the foot edges (eq. 18 bounds).
         """
         half = np.maximum(np.array(FOOT_SIZE) / 2.0 - margin, 0.0)
-        final = self.feet_final
         return PlanSample._make(
             _sample(
                 np.atleast_1d(np.asarray(times, dtype=float)),
@@ -222,7 +221,7 @@ class FootstepPlan:
                 self._table,
                 self.has_end_dsp,
                 self.feet_init,
-                final,
+                self.feet_final,
                 self.zmp_at_walk_end,
                 max(self.final_dsp_time, 1e-9),
                 half,
