@@ -284,8 +284,13 @@ def test_a_fallen_robot_lies_marked_until_every_robot_restarts_together(running)
     assert f is not None
     assert before.clock >= fell_at + FALL_HOLD_S - 1e-9  # shown down for the whole hold
     assert before.robots[1].t > FALL_HOLD_S  # while the other robot walked on
-    for r in f.robots:  # then all restarted at t = 0 together, the falls counted on
-        assert r.t < 0.05 and not r.fell and not r.waiting
+    # then all restarted together, the falls counted on. The new walk began once the hold
+    # was over, so its time is at most the session time since then; not "t near 0": a loop
+    # catching up (a busy machine, speed 4) publishes by wall time, and the first frame after
+    # the restart may show the new walk well begun
+    for r in f.robots:
+        assert r.t <= f.clock - (fell_at + FALL_HOLD_S) + 1e-9 and r.t < FALL_HOLD_S
+        assert not r.fell and not r.waiting
     assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
     assert [r.falls for r in f.robots] == [1, 0]
     assert sim.intent.auto_restarts == 1 and not f.restarted
@@ -320,7 +325,9 @@ def test_a_pushed_robot_falls_and_lies_where_it_fell(running):
     assert np.ptp(pelvis[:, :2], axis=0).max() < 0.05  # where it fell, not sliding about
     assert down[-1].robots[0].t > down[0].robots[0].t + 2.0  # the fixed pelvis walked on
     assert not down[-1].robots[0].fell
-    assert all(r.t < 0.05 and not r.fell for r in f.robots)
+    # both began a new walk once the hold was over (at most the time since then: see above)
+    assert all(r.t <= f.clock - (fell_at + FALL_HOLD_S) + 1e-9 for r in f.robots)
+    assert all(r.t < FALL_HOLD_S and not r.fell for r in f.robots)
     assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
 
 
