@@ -291,6 +291,61 @@ def test_the_panel_the_state_and_the_sessions_list_agree_after_every_transition(
     client.put("/api/sim/speed", json={"speed": 1.0})
 
 
+def test_a_move_in_the_browser_survives_an_intent_change_before_its_callback(panel_view):
+    """viser sets a control's value when the viewer moves it and runs its callback later, on
+    another thread. An unrelated intent change drawn in between (a new speed here; on a busy
+    machine the time base moving) must not set the control back: the slider snapped back and
+    the move was lost. The same for the timeline dragged while paused."""
+    import time
+
+    sim, view, _client = panel_view
+    panel = view.panel
+    clock = [time.monotonic()]
+
+    def draw():
+        clock[0] += 10.0
+        view.draw(clock[0])
+
+    handle, log = panel.controls[("walk", "step_length")]
+    assert not log
+    before = sim.intent.params.walk.step_length
+    target = round(before + 0.05, 2)
+    draw()
+    assert handle.value == before
+    try:
+        handle._impl.value = target  # what viser does with the viewer's message, first
+        sim.wait_applied(sim.set_speed(1.5), 10)  # then an unrelated change is drawn
+        draw()
+        assert handle.value == target, "the control was set back over the viewer's move"
+        panel._param_changed("walk", "step_length")  # the callback runs at last
+        assert sim.intent.params.walk.step_length == target
+        draw()
+        assert handle.value == target
+        # a change from elsewhere (the API, another viewer) still moves the control
+        sim.wait_applied(sim.update_params(walk={"step_length": before}), 10)
+        draw()
+        assert handle.value == before
+
+        f = sim.wait_frame(timeout=30)
+        while f.clock < 3.0:  # something kept to seek in
+            f = sim.wait_frame(f.seq, timeout=30)
+        assert sim.wait_applied(sim.pause(), 10)
+        draw()
+        kept = sim.playback().kept
+        mid = round((kept[0] + kept[1]) / 2, 2)
+        panel.timeline._impl.value = mid  # dragged while paused, the callback not yet run
+        sim.wait_applied(sim.set_speed(1.0), 10)
+        draw()
+        assert panel.timeline.value == mid
+        panel._seek()
+        assert sim.playback().shown_t == sim.frames.nearest(mid).clock  # where it was dragged
+        assert abs(sim.playback().shown_t - mid) < (kept[1] - kept[0]) / 4
+    finally:
+        sim.update_params(walk={"step_length": before})
+        sim.set_speed(1.0)
+        sim.wait_applied(sim.resume(), 10)
+
+
 def test_a_students_panel_is_read_only_and_says_why(panel_view):
     """With an instructor, a student's view of the shared demo: every control that changes
     the session is disabled, a click that still arrives is refused with a message, and what

@@ -88,6 +88,8 @@ class ControlPanel:
         self.view = view
         self._local = threading.local()  # .reflecting: True inside reflect() on that thread
         self._reflected_version = -1
+        # control key -> the intent's value last put in that control (see _put)
+        self._reflected: dict[Any, Any] = {}
         self._session_id = id(view.session)
         self.controls: dict[tuple[str, str], tuple[Any, bool]] = {}  # -> (handle, log scale)
         self.method_boxes: dict[str, Any] = {}
@@ -279,6 +281,7 @@ class ControlPanel:
     def _say(self, message: str) -> None:
         self._message, self._message_at = message, time.monotonic()
         self._reflected_version = -1  # put the controls back at the values in force
+        self._reflected.clear()  # every one, the refused value included
 
     def _param_changed(self, group: str, name: str) -> None:
         if self.guarded():
@@ -289,6 +292,7 @@ class ControlPanel:
             value = float(f"{value:.3g}")
         if getattr(getattr(self.session.intent.params, group), name) == value:
             return
+        self._reflected.pop((group, name), None)  # shown as the intent takes it (rounded)
         try:
             self.session.update_params(**{group: {name: value}})
         except ValueError as exc:
@@ -306,6 +310,7 @@ class ControlPanel:
     def _speed_changed(self) -> None:
         if self.guarded() or self.speed.value == self.session.intent.speed:
             return
+        self._reflected.pop("speed", None)
         self.session.set_speed(self.speed.value)
 
     def _reset(self) -> None:
@@ -330,6 +335,7 @@ class ControlPanel:
     def _seek(self) -> None:
         if self.guarded() or not self.session.intent.paused:
             return
+        self._reflected.pop("timeline", None)  # rests at the kept instant nearest the drag
         try:
             self.session.seek(float(self.timeline.value))
         except ValueError as exc:
@@ -376,14 +382,15 @@ class ControlPanel:
             self._session_id = id(session)
             self.plots.session = session
             self._reflected_version = -1
+            self._reflected.clear()
         if intent.version != self._reflected_version:
             self._local.reflecting = True
             try:
                 self._reflect_params(intent.params)
                 for method, box in self.method_boxes.items():
-                    box.value = method in intent.methods
+                    self._put(("method", method), box, method in intent.methods)
                 self.push_robot.options = intent.methods
-                self.speed.value = intent.speed
+                self._put("speed", self.speed, intent.speed)
                 self.pause_button.label = "Resume" if intent.paused else "Pause"
                 self.pause_button.icon = (
                     viser.Icon.PLAYER_PLAY if intent.paused else viser.Icon.PLAYER_PAUSE
@@ -402,13 +409,22 @@ class ControlPanel:
             self.inspector.update(frame, now)
             self.learn.update(frame, now)
 
+    def _put(self, key: Any, handle: Any, value: Any) -> None:
+        """Move a control to the intent's ``value`` if that value changed since it was last
+        put there. viser sets a control's value when the viewer moves it and runs its
+        callback later, on another thread: an intent change in between (a restart, the time
+        base moving on a busy machine) must not set the control back and lose the move."""
+        if key in self._reflected and self._reflected[key] == value:
+            return
+        self._reflected[key] = value
+        if handle.value != value:
+            handle.value = value
+
     def _reflect_params(self, params: ControllerParams) -> None:
         for (group, name), (handle, log) in self.controls.items():
             value = getattr(getattr(params, group), name)
             meta = spec(getattr(params, group))[name]
-            shown = self._to_slider(value, meta) if log else value
-            if handle.value != shown:
-                handle.value = shown
+            self._put((group, name), handle, self._to_slider(value, meta) if log else value)
 
     def _update_timeline(self, playback: Playback) -> None:
         """The timeline spans what is kept (running or paused) and rests at the instant shown
@@ -424,8 +440,7 @@ class ControlPanel:
         try:
             if (self.timeline.min, self.timeline.max) != (lo, hi):
                 self.timeline.min, self.timeline.max = lo, hi
-            if abs(self.timeline.value - value) > 1e-6:
-                self.timeline.value = value
+            self._put("timeline", self.timeline, value)  # not over a drag not yet sought
         finally:
             self._local.reflecting = False
 
