@@ -196,7 +196,7 @@ class ComMpc:
         self._q_dv = params.beta * Pdu.T @ self.dvel_from_state  # (N, 3)
         self.A_ctrl, self.B_ctrl = lipm_discrete(self.control_dt)
         # (N,) k T_p [s], one object per set_params (the walker's plan table keys on it)
-        self.sample_offsets = self.T * np.arange(1, N + 1)
+        self.sample_offsets = frozen(self.T * np.arange(1, N + 1))  # (N,) [s] k T_p
         if old_n is not None and old_n != N:
             self.solver.reset()
             self._prev_jerk = None

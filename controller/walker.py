@@ -5,7 +5,9 @@ Order of a tick (docs/DESIGN.md, "One control tick"):
  2. ZMP reference and 3. CoM MPC (eq. 10-18), predicted CoM (eq. 25-26),
  4. pelvis position (eq. 19), 5. foot trajectories (eq. 20-21),
  6. reference pelvic angle over the horizon (eq. 27-33),
- 7. pelvic-rotation MPC (eq. 34-38, method ``mpc`` only),
+ 7. the pelvis strategy's waist rate (``controller.strategy``: the pelvic-rotation MPC of
+    eq. 34-38 for the paper's method, 0 for the fixed pelvis, free for redundancy, or a
+    user's own),
  8. QP inverse kinematics of the 13 lower-body joints (eq. 39-40),
  9. arm swing on the centroidal momentum matrix (eq. 41-43),
 10. joint targets for the position servos.
@@ -26,8 +28,9 @@ Choices where the paper is vague (documented here once):
   by v dt / K_p; with K_p = 1 (deadbeat) the servo delay makes it oscillate.
 - The IK runs on the *commanded* joint state (closed-loop IK on q_cmd), so nothing drifts;
   the desired foot velocity is the feed-forward plus ``ik.foot_gain`` times the pose error.
-- The waist angle fed to the pelvic MPC is the commanded waist angle; its rate is the MPC's
-  own integrated rate (eq. 38).
+- The waist angle a strategy reads (``StrategyInputs.theta``) is the commanded waist angle,
+  its rate the one the IK commanded at the last tick; the pelvic MPC integrates its own rate
+  (eq. 38).
 - ``controller/`` never reads a clock: the caller may pass ``clock`` (e.g. time.perf_counter)
   to get per-layer timings; without it the timings are zero.
 """
@@ -50,10 +53,11 @@ from controller.footsteps import (
 from controller.ik import build_ik, flat_foot_velocity_command, solve_ik
 from controller.jit import kernel
 from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
-from controller.params import ControllerParams, horizon_samples
-from controller.pelvis_mpc import PelvisMpc, PelvisPlan
+from controller.params import ControllerParams
+from controller.pelvis_mpc import PelvisPlan
 from controller.pelvis_reference import lateral_distances, reference_pelvic_angles
 from controller.qp import QpSolver
+from controller.strategy import Runner, StrategyInputs, create
 
 LAYERS = ("plan", "kinematics", "com_mpc", "pelvis_mpc", "ik", "arm_swing")
 
@@ -75,7 +79,7 @@ class TickOutput:
     theta_ref: np.ndarray  # (N,) reference pelvic angle over the horizon (eq. 33) [rad]
     lateral: np.ndarray  # (N, 2) lateral distances of eq. (31)-(32) [m] (left > 0, right < 0)
     plan_sample: PlanSample  # the plan at t, t + dt and the N horizon samples
-    pelvis_plan: PelvisPlan | None  # MPC's optimised pelvic angles (method mpc) or None
+    pelvis_plan: PelvisPlan | None  # the strategy's optimised pelvic angles (the MPC's) or None
     p_world_pelvis_des: np.ndarray  # (3,) desired pelvis position (eq. 19) [m]
     p_world_com_des: np.ndarray  # (2,) desired CoM x, y [m]
     p_world_com_meas: np.ndarray  # (3,) CoM from measured joints, support-anchored [m]
@@ -91,6 +95,7 @@ class TickOutput:
     failures: dict[str, bool]  # which QP failed this tick (layer -> bool)
     speed_limited: bool  # a joint velocity sat at its limit
     layer_s: dict[str, float] = field(default_factory=dict)  # [s] time per layer (with clock)
+    strategy_s: float = 0.0  # [s] the strategy's waist_rate call alone (0 without a clock)
     _diagnostics: tuple[float, float, np.ndarray] | None = None  # cache of the three below
 
     def _diagnosed(self) -> tuple[float, float, np.ndarray]:
@@ -128,6 +133,11 @@ class Walker:
         p_world_pelvis_init: (3,) initial pelvis (base) position [m].
         backend: QP back-end of every layer ("daqp": exact active set, the default; "osqp").
         clock: optional zero-argument timer for per-layer timings.
+
+    Raises:
+        ValueError: ``params.method`` names no registered strategy.
+        controller.strategy.StrategyError: the strategy's constructor failed; from
+            :meth:`tick`: the strategy raised or returned no rate (the walker then stops).
     """
 
     def __init__(
@@ -164,11 +174,10 @@ class Walker:
         self.com_state = np.zeros((3, 2))
         self.com_state[0] = com0[:2]
         self.com_mpc = ComMpc(params.com, self.com_height, self.dt, backend)
-        n = horizon_samples(params.com)
-        self.pelvis_mpc = PelvisMpc(params.pelvis, params.com.sample_time, n, self.dt, backend)
+        # how the pelvis turns: the registered strategy named by params.method
+        self.strategy: Runner = create(params.method, backend)
         self.ik_solver = QpSolver(backend)
         self.arm_solver = QpSolver(backend)
-        self.theta_dot = 0.0  # [rad/s] the pelvic MPC's integrated rate (eq. 38)
         self._last_waist_rate = 0.0  # [rad/s] waist rate of the last IK solution
         self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
         self._pending: ControllerParams | None = None
@@ -189,16 +198,10 @@ class Walker:
             self.plan = self.plan.replanned(new.walk, self.t)
         if new.com != old.com:
             self.com_mpc.set_params(new.com)
-        if (
-            new.pelvis != old.pelvis
-            or new.com.horizon != old.com.horizon
-            or (new.com.sample_time != old.com.sample_time)
-        ):
-            self.pelvis_mpc.set_params(new.pelvis, new.com.sample_time, horizon_samples(new.com))
         if new.method != old.method:
+            # another strategy: reset at this tick, from the waist rate the IK last commanded
+            self.strategy = create(new.method, self.backend)
             self.ik_solver.reset()
-            # The pelvic MPC's rate state starts from the waist rate the IK last commanded.
-            self.theta_dot = self._last_waist_rate
         self.params = new
 
     @property
@@ -262,15 +265,32 @@ class Walker:
         )
         theta_ref = reference_pelvic_angles(com_plan.com, feet_l, feet_r, p.pelvis.k_pel, lateral)
 
-        # 7. Pelvic-rotation MPC (eq. 34-38).
-        lower, arms = self.lower, self.arms
-        theta = float(self.q_cmd[lower[0]])
-        pelvis_plan: PelvisPlan | None = None
-        waist_rate = 0.0
-        if p.method == "mpc":
-            pelvis_plan = self.pelvis_mpc.solve(theta, self.theta_dot, theta_ref)
-            waist_rate = pelvis_plan.next_rate
-            self.theta_dot = pelvis_plan.next_rate
+        # 7. The pelvis strategy's waist rate (the paper's: the pelvic MPC, eq. 34-38).
+        arms = self.arms
+        theta_ref.flags.writeable = False  # read-only for the strategy (and the displays)
+        com_plan.com.flags.writeable = False
+        s0 = clock() if clock else 0.0
+        waist_rate = self.strategy.waist_rate(
+            StrategyInputs(
+                t,
+                dt,
+                float(self.q_cmd[0]),
+                self._last_waist_rate,
+                theta_ref,
+                self.com_mpc.sample_offsets,
+                com_plan.com,
+                _read_only(p_world_com_des),
+                _read_only(plan.p_left[h]),
+                _read_only(plan.p_right[h]),
+                _read_only(plan.p_left[0]),
+                _read_only(plan.p_right[0]),
+                _SUPPORT[int(plan.support_side[0])] if plan.in_ssp[0] else "both",
+                int(plan.step[0]),
+                float(plan.s_ssp[0]),
+                p,
+            )
+        )
+        pelvis_plan = self.strategy.plan
         c4 = clock() if clock else 0.0
 
         # 8. QP inverse kinematics (eq. 39-40) on the commanded state.
@@ -303,8 +323,7 @@ class Walker:
             self._q_max_low,
             p.ik,
             dt,
-            p.method,
-            waist_rate if p.method == "mpc" else None,
+            waist_rate,
         )
         q_dot_low, ik_ok = solve_ik(qp, self.ik_solver)
         if not ik_ok:
@@ -384,6 +403,7 @@ class Walker:
                 if clock
                 else {}
             ),
+            strategy_s=c4 - s0,
         )
 
     # -- helpers -----------------------------------------------------------------------------
@@ -431,6 +451,15 @@ class Walker:
     def replace_params(self, **groups) -> None:
         """Convenience: ``w.replace_params(walk=dict(step_length=0.3))``."""
         self.set_params(self.snapshot_params().replace(**groups))
+
+
+_SUPPORT = ("left", "right")  # StrategyInputs.support in single support, by support side
+
+
+def _read_only(a: np.ndarray) -> np.ndarray:
+    """``a`` (a view of the tick's plan rows) made read-only for the strategy."""
+    a.flags.writeable = False
+    return a
 
 
 @kernel
