@@ -14,17 +14,30 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
-from app.params_cli import MethodList, add_param_options, params_from_args, positive_int
+from app.params_cli import (
+    MethodList,
+    add_param_options,
+    add_strategy_argument,
+    load_strategy_options,
+    method_name,
+    params_from_args,
+    positive_int,
+)
 from app.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from app.sweep.cli import add_sweep_arguments
-from controller.params import METHODS
+from controller import strategy
 
 if TYPE_CHECKING:
     from app.sim.session import RunConfig
 
 
 class _Parser(argparse.ArgumentParser):
-    """argparse that reports errors on one line (no usage dump) and exits 2."""
+    """argparse that reports errors on one line (no usage dump) and exits 2. No abbreviated
+    options: ``--strategy`` is read before parsing (its files name the methods)."""
+
+    def __init__(self, *args, **kwargs) -> None:
+        kwargs.setdefault("allow_abbrev", False)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f"{self.prog}: error: {message}\n")
@@ -77,7 +90,12 @@ def build_parser() -> argparse.ArgumentParser:
         action=MethodList,
         default=None,
         help="the robots every session starts with, with commas or spaces (default: fixed "
-        "redundancy mpc)",
+        "redundancy mpc and every --strategy)",
+    )
+    add_strategy_argument(
+        p,
+        "FILE.py[:Class]: your own pelvis strategy (docs/STRATEGIES.md), one more robot "
+        "beside the paper's three, in its own colour (repeatable); loaded once at start",
     )
     p.add_argument(
         "--workers",
@@ -136,7 +154,21 @@ def build_parser() -> argparse.ArgumentParser:
         description="One headless closed-loop run. Every parameter of controller/params.py "
         "has an option (or use --set GROUP.NAME=VALUE).",
     )
-    p.add_argument("--method", choices=METHODS, required=True)
+    how = p.add_mutually_exclusive_group(required=True)
+    how.add_argument(
+        "--method",
+        type=method_name,
+        default=None,
+        help=f"how the pelvis turns: {', '.join(strategy.BUILTINS)} (the paper's three), or "
+        "the name of a strategy --strategy loads",
+    )
+    how.add_argument(
+        "--strategy",
+        dest="strategy_file",
+        default=None,
+        metavar="FILE.py[:Class]",
+        help="your own pelvis strategy instead of --method (docs/STRATEGIES.md)",
+    )
     add_param_options(p, required={"walk.step_length"})
     p.add_argument(
         "--seed",
@@ -178,6 +210,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p.add_argument("--out", type=Path, required=True, metavar="DIR")
     p.add_argument("--quick", action="store_true", help="a small smoke set (about 2 min)")
+    add_strategy_argument(
+        p,
+        "FILE.py[:Class]: your own pelvis strategy, studied beside the paper's three "
+        "(its own column in the tables; repeatable)",
+    )
     p.add_argument(
         "--jobs",
         type=positive_int,
@@ -231,8 +268,13 @@ def build_parser() -> argparse.ArgumentParser:
         "step; a run recovers when the robot has not fallen by the end of the plan.",
     )
     p.add_argument(
-        "--methods", nargs="+", action=MethodList, default=list(METHODS), help="commas or spaces"
+        "--methods",
+        nargs="+",
+        action=MethodList,
+        default=list(strategy.BUILTINS),
+        help="commas or spaces (default: fixed redundancy mpc)",
     )
+    add_strategy_argument(p)
     p.add_argument("--step-length", type=_finite, default=0.3, help="[m] (default 0.3)")
     p.add_argument("--direction", choices=("left", "right", "forward", "back"), default="left")
     p.add_argument("--duration", type=_finite, default=0.1, help="[s] (default 0.1)")
@@ -250,11 +292,26 @@ def simulate_config(args: argparse.Namespace) -> RunConfig:
 
     if args.disturbance is not None and args.seed is None:
         raise ValueError("--disturbance needs --seed (the pushes are drawn from the seed)")
-    params = params_from_args(args, method=args.method)
+    params = params_from_args(args, method=simulate_method(args))
     cfg = spec_of(params, args.seed).config()
     if args.disturbance is not None:
         cfg = dataclasses.replace(cfg, disturbance=args.disturbance)
     return dataclasses.replace(cfg, backend=args.backend)
+
+
+def simulate_method(args: argparse.Namespace) -> str:
+    """The strategy ``simulate`` runs: ``--method``, or the one strategy of ``--strategy``
+    (loaded before parsing); ValueError if that file holds several and names none."""
+    if args.method is not None:
+        return args.method
+    file, cls = strategy.parse_source(args.strategy_file)
+    loaded = strategy.load_file(args.strategy_file)  # already loaded: no work
+    if len(loaded) > 1:
+        raise ValueError(
+            f"--strategy {file} defines {len(loaded)} strategies ({', '.join(loaded)}): name "
+            f"one class, as {file}:ClassName"
+        )
+    return loaded[0]
 
 
 def _simulate(args: argparse.Namespace) -> int:
@@ -273,7 +330,15 @@ def _simulate(args: argparse.Namespace) -> int:
         recorder = HeadlessRecorder(params.method)
     session = run(cfg, on_tick=recorder.capture if recorder else None)
     summary = summarize(session)
-    ok = "success" if summary["success"] else ("FELL" if summary["fell"] else "incomplete")
+    ok = (
+        "success"
+        if summary["success"]
+        else "FELL"
+        if summary["fell"]
+        else "STOPPED by its strategy"
+        if summary["strategy_error"]
+        else "incomplete"
+    )
     le = summary["landing_error_max"]
     print(
         f"{summary['method']} step {summary['step_length']:.3f} m x {summary['steps_planned']}: "
@@ -292,6 +357,15 @@ def _simulate(args: argparse.Namespace) -> int:
         )
     if summary["fell"]:
         print(f"fell at {summary['fall_time']:.2f} s: {summary['fall_reason']}")
+    if summary["strategy_error"]:
+        print(f"stopped at t = {summary['strategy_error_time']:.3f} s: {summary['strategy_error']}")
+    tick_ms = params.control_dt * 1e3
+    if summary["strategy_ms_median"] > tick_ms:
+        print(
+            f"warning: the strategy takes {summary['strategy_ms_median']:.1f} ms a tick "
+            f"(median; max {summary['strategy_ms_max']:.1f} ms), more than the {tick_ms:g} ms "
+            "control period: it cannot run in real time live"
+        )
     if args.json:
         args.json.write_text(json.dumps(summary, indent=2))
     if args.csv:
@@ -305,7 +379,8 @@ def _write_recording(recorder, args: argparse.Namespace) -> None:
     """``simulate --record``: the whole run as a zip or a folder (by the path's extension)."""
     from app.web import recording
 
-    source = f"headless run (pelvic-walk simulate --method {args.method})"
+    how = f"--strategy {args.strategy_file}" if args.strategy_file else f"--method {args.method}"
+    source = f"headless run (pelvic-walk simulate {how})"
     try:
         path = recording.write(recorder.recording(source), args.record)
     finally:
@@ -347,6 +422,13 @@ def _check_output_paths(args: argparse.Namespace) -> str | None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    # a user's strategies first: their names are methods the options below may name
+    problem = load_strategy_options(argv)
+    if problem:
+        command = next((a for a in argv if not a.startswith("-")), "")
+        print(f"pelvic-walk {command}: error: {problem}".replace("  ", " "), file=sys.stderr)
+        return 2
     parser = build_parser()
     args = parser.parse_args(argv)
     problem = _check_output_paths(args)
@@ -374,6 +456,7 @@ def main(argv: list[str] | None = None) -> int:
                 args.methods,
                 args.shared_demo,
                 args.instructor_token,
+                args.strategies,
             )
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main

@@ -68,19 +68,76 @@ def split_list(items: Iterable[str]) -> list[str]:
     return [part.strip() for item in items for part in item.split(",") if part.strip()]
 
 
+STRATEGY_HELP = (
+    "FILE.py[:Class]: your own pelvis strategy (a subclass of pelvic_walk.PelvisStrategy; "
+    "docs/STRATEGIES.md), loaded once at start; its name becomes a method (repeatable)"
+)
+
+
+def add_strategy_argument(parser: argparse.ArgumentParser, help: str = STRATEGY_HELP) -> None:
+    """``--strategy FILE.py[:Class]`` (repeatable). The files are loaded before the options
+    are parsed (:func:`load_strategy_options`), so ``--method(s)`` know their names."""
+    parser.add_argument(
+        "--strategy",
+        dest="strategies",
+        action="append",
+        default=[],
+        metavar="FILE.py[:Class]",
+        help=help,
+    )
+
+
+def strategy_options(argv: Iterable[str]) -> list[str]:
+    """The values of every ``--strategy`` in a command line (``--strategy X``, ``--strategy=X``)."""
+    out: list[str] = []
+    args = iter(argv)
+    for arg in args:
+        if arg == "--strategy":
+            out.append(next(args, ""))
+        elif arg.startswith("--strategy="):
+            out.append(arg.partition("=")[2])
+    return out
+
+
+def load_strategy_options(argv: Iterable[str]) -> str | None:
+    """Load the strategy files a command line names; a one-line error, or None."""
+    from controller import strategy
+
+    for source in strategy_options(argv):
+        if not source:
+            return "argument --strategy: expected FILE.py[:Class]"
+        try:
+            strategy.load_file(source)
+        except strategy.StrategyLoadError as exc:
+            return f"--strategy {exc}"
+    return None
+
+
+def method_name(text: str) -> str:
+    """An argparse type: a registered strategy's name (a built-in, or one --strategy loaded)."""
+    from controller import strategy
+
+    if not strategy.is_registered(text):
+        raise argparse.ArgumentTypeError(
+            f"unknown method {text!r} (choose from {', '.join(strategy.names())}; load your "
+            "own with --strategy FILE.py)"
+        )
+    return text
+
+
 class MethodList(argparse.Action):
     """``--methods``: walking methods given with commas or spaces alike, each checked (an
     unknown one is the parser's one-line error, exit 2); duplicates dropped, order kept."""
 
     def __call__(self, parser, namespace, values, option_string=None):
-        from controller.params import METHODS
+        from controller import strategy
 
         methods = list(dict.fromkeys(split_list(values)))
-        unknown = [m for m in methods if m not in METHODS]
+        unknown = [m for m in methods if not strategy.is_registered(m)]
         if unknown or not methods:
             parser.error(
                 f"argument {option_string}: unknown method {unknown[0]!r} (choose from "
-                f"{', '.join(METHODS)})"
+                f"{', '.join(strategy.names())}; load your own with --strategy FILE.py)"
                 if unknown
                 else f"argument {option_string}: name at least one method"
             )

@@ -24,8 +24,9 @@ import mujoco
 import numpy as np
 
 from app.sim.session import RunConfig, Session
+from controller import strategy
 from controller.footsteps import LEFT
-from controller.params import METHODS, ControllerParams
+from controller.params import ControllerParams
 
 DIRECTIONS = {"left": (0.0, 1.0), "right": (0.0, -1.0), "forward": (1.0, 0.0), "back": (-1.0, 0.0)}
 PUSH_STEP = 2  # the pushed step: the third, past the start-up step, in steady walking
@@ -64,8 +65,7 @@ def run_push(
 ) -> PushOutcome:
     """Walk ``n_steps`` of ``step_length`` and push the torso ``force`` N toward ``direction``
     for ``duration`` s from the middle of step ``step``'s single support."""
-    if method not in METHODS:
-        raise ValueError(f"unknown method {method!r}: choose from {', '.join(METHODS)}")
+    strategy.info(method)  # ValueError naming the choices
     if direction not in DIRECTIONS:
         raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {direction!r}")
     if not (math.isfinite(force) and force >= 0.0):

@@ -3,7 +3,9 @@
 A spec is method, step length, steps, arm swing, seed, and any other parameter of
 ``controller/params.py`` as ``("group.name", value)`` overrides. It crosses process and Ray
 boundaries as it is (no MuJoCo or Pinocchio object): a worker builds its own run from
-:meth:`RunSpec.config`.
+:meth:`RunSpec.config`. The method is a registered pelvis strategy (``controller.strategy``);
+a user's strategy travels as its file (``strategy_file``: the path and class), which a worker
+that does not know the name yet loads.
 
 A *seeded* spec is one of the study's repeats: a 0.01 rad perturbation of the initial state and
 a horizontal force on the torso through the whole run, each axis N(0, :data:`DISTURBANCE`)
@@ -18,7 +20,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from controller.params import GROUPS, METHODS, ControllerParams
+from controller import strategy
+from controller.params import GROUPS, ControllerParams
 
 if TYPE_CHECKING:
     from app.sim.session import RunConfig
@@ -60,16 +63,25 @@ class RunSpec:
     value)`` pairs (kept sorted by name, so equal specs compare and hash equal).
     """
 
-    method: str
+    method: str  # a registered strategy's name
     step_length: float  # [m]
     n_steps: int
     arms: bool = True
     seed: int | None = None
     overrides: tuple[Override, ...] = ()
+    # "FILE.py:Class" of a user's strategy (filled in from the registry; None: a built-in)
+    strategy_file: str | None = None
 
     def __post_init__(self) -> None:
-        if self.method not in METHODS:
-            raise ValueError(f"method must be one of {', '.join(METHODS)}, got {self.method!r}")
+        if self.strategy_file is not None:
+            try:
+                loaded = strategy.load_file(self.strategy_file)
+            except strategy.StrategyLoadError as exc:
+                raise ValueError(str(exc)) from None
+            if self.method not in loaded:
+                raise ValueError(f"{self.strategy_file} defines no strategy {self.method!r}")
+        else:
+            object.__setattr__(self, "strategy_file", strategy.info(self.method).source)
         for name, value in self.overrides:
             _check_override(name, value)
         names = [name for name, _ in self.overrides]
@@ -104,7 +116,14 @@ class RunSpec:
         for name, value in self.overrides:
             group, _, fname = name.partition(".")
             groups.setdefault(group, {})[fname] = value
+        self.load_strategy()
         return ControllerParams().replace(method=self.method, **groups)
+
+    def load_strategy(self) -> None:
+        """Register the spec's strategy in this process if it is a user's not known here (a
+        worker process or a Ray task: the spec crossed without running ``__init__``)."""
+        if self.strategy_file is not None and not strategy.is_registered(self.method):
+            strategy.load_file(self.strategy_file)
 
     def config(self) -> RunConfig:
         """The headless run of this spec (``app.runs.run`` takes it)."""
@@ -122,7 +141,7 @@ class RunSpec:
         """The ``pelvic-walk simulate`` command line that reruns this spec."""
         parts = [
             "pelvic-walk simulate",
-            f"--method {self.method}",
+            f"--strategy {self.strategy_file}" if self.strategy_file else f"--method {self.method}",
             f"--step-length {self.step_length:g}",
             f"--steps {self.n_steps}",
         ]

@@ -15,6 +15,7 @@ from app.run_spec import OWN_FIELDS, RunSpec
 from app.sim.session import RunConfig, Session
 from app.sim.summary import SUMMARY_KEYS, summarize
 from controller.params import GROUPS, ControllerParams
+from controller.strategy import StrategyError
 
 __all__ = ["SUMMARY_KEYS", "RunConfig", "Session", "run", "spec_of", "summarize"]
 
@@ -42,7 +43,7 @@ def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:
         params.arms.enabled,
         seed,
         tuple(overrides),
-    )
+    )  # (a user's strategy: the spec takes its file from the registry)
     if spec.params() != params:  # a parameter outside the groups (none today)
         raise ValueError("these parameters have no study run spec")
     return spec
@@ -53,14 +54,18 @@ def run(
     max_wall_s: float | None = None,
     on_tick: Callable[[Session], None] | None = None,
 ) -> Session:
-    """Run a whole plan headless (stops ``cfg.settle_time`` after a fall, or at ``max_wall_s``
-    of wall time); returns the session with its series and summary. ``on_tick`` (e.g. a
-    recording's capture) is called with the session after every control tick."""
+    """Run a whole plan headless (stops ``cfg.settle_time`` after a fall, at once when the
+    pelvis strategy fails (``session.error``), or at ``max_wall_s`` of wall time); returns the
+    session with its series and summary. ``on_tick`` (e.g. a recording's capture) is called
+    with the session after every control tick."""
     session = Session(cfg)
     start = time.perf_counter()
     settle_ticks = int(cfg.settle_time / cfg.params.control_dt)
     while not session.walker.finished:
-        session.tick()
+        try:
+            session.tick()
+        except StrategyError:  # recorded in session.error; the summary says it
+            break
         if on_tick is not None:
             on_tick(session)
         if session.fell:

@@ -83,8 +83,9 @@ class PelvisStrategy:
     called at the start of each walk (the robot's restarts included).
 
     Attributes:
-        name: the robot's key and label (letters, digits, ``_ . -``; starts with a letter).
-        label: a longer name for legends (default: ``name``).
+        name: the robot's key (letters, digits, ``_ . -``; starts with a letter), as
+            ``--method``, ``/api/...?method=`` and the study's tables know it.
+        label: a few words on the robot's tag and in legends (default: ``name``).
         color: RGB 0-255 of the robot in the scene and plots (default: one from a palette).
         plan: a :class:`~controller.pelvis_mpc.PelvisPlan` a strategy that optimises over
             the horizon may set each tick; it is drawn as the optimised pelvic angle (the
@@ -93,6 +94,7 @@ class PelvisStrategy:
 
     name: ClassVar[str] = ""
     label: ClassVar[str] = ""
+    paper_label: ClassVar[str] = ""  # the built-ins: how the paper names them (figures)
     color: ClassVar[tuple[int, int, int] | None] = None
     plan: PelvisPlan | None = None
 
@@ -115,7 +117,8 @@ class FixedPelvis(PelvisStrategy):
     """No pelvic rotation: the waist rate is pinned to 0 and the legs alone reach."""
 
     name = FIXED
-    label = "fixed pelvis (W/O rotation)"
+    label = "fixed pelvis"
+    paper_label = "fixed pelvis (W/O rotation)"
     color = (20, 80, 190)
 
     def waist_rate(self, s: StrategyInputs) -> float:
@@ -127,7 +130,8 @@ class RedundancyPelvis(PelvisStrategy):
     prediction; the damping spreads motion onto it in the swing, a small pull brings it back."""
 
     name = REDUNDANCY
-    label = "rotation by redundancy [21]"
+    label = "redundancy"
+    paper_label = "rotation by redundancy [21]"
     color = (0, 150, 80)
 
     def waist_rate(self, s: StrategyInputs) -> None:
@@ -144,7 +148,8 @@ class PelvisMpcStrategy(PelvisStrategy):
     """
 
     name = MPC
-    label = "rotation by MPC (proposed)"
+    label = "pelvic MPC"
+    paper_label = "rotation by MPC (proposed)"
     color = (235, 150, 0)
 
     def __init__(self, backend: str = "daqp"):
@@ -217,7 +222,8 @@ class StrategyInfo:
     """A registered strategy as the rest of the tool sees it."""
 
     name: str
-    label: str  # for legends
+    label: str  # a few words: the robot's tag, legends
+    paper_label: str  # how the paper names it (the study's figures); the label for others
     color: tuple[int, int, int]  # RGB 0-255
     description: str  # the class docstring's first paragraph
     builtin: bool
@@ -256,7 +262,9 @@ def register(
         raise ValueError(f"{where}: {cls.__name__} does not define waist_rate(self, s)")
     old = _REGISTRY.get(name)
     if old is not None and old.cls is not cls:
-        same_file = old.source is not None and source is not None and old.file == source.rpartition(":")[0]
+        same_file = (
+            old.source is not None and source is not None and old.file == source.rpartition(":")[0]
+        )
         if not (replace and same_file):
             taken = "a built-in strategy" if old.builtin else old.source
             raise ValueError(f"{where}: the name {name!r} is taken by {taken}")
@@ -271,8 +279,11 @@ def register(
     else:
         users = sum(1 for i in _REGISTRY.values() if not i.builtin and i.name != name)
         color = PALETTE[users % len(PALETTE)]
-    label = cls.label if isinstance(cls.label, str) and cls.label else name
-    info = StrategyInfo(name, label, color, _description(cls), source is None, source, cls)
+    label = cls.label if isinstance(cls.label, str) and cls.label.strip() else name
+    paper_label = cls.paper_label if isinstance(cls.paper_label, str) and cls.paper_label else label
+    info = StrategyInfo(
+        name, label, paper_label, color, _description(cls), source is None, source, cls
+    )
     _REGISTRY[name] = info
     return info
 
@@ -496,12 +507,12 @@ def _import(path: str, shown: str) -> Any:
         spec.loader.exec_module(module)
     except SyntaxError as exc:
         del sys.modules[name]
-        raise StrategyLoadError(
-            f"{shown}:{exc.lineno}: SyntaxError: {exc.msg}"
-        ) from None
+        raise StrategyLoadError(f"{shown}:{exc.lineno}: SyntaxError: {exc.msg}") from None
     except Exception as exc:  # noqa: BLE001 - the user's module: one line with its place
         del sys.modules[name]
-        frames = [f for f in traceback.extract_tb(exc.__traceback__) if _same_file(f.filename, path)]
+        frames = [
+            f for f in traceback.extract_tb(exc.__traceback__) if _same_file(f.filename, path)
+        ]
         line = f":{frames[-1].lineno}" if frames else ""
         raise StrategyLoadError(f"{shown}{line}: {_exc_line(exc)}") from None
     return module
@@ -529,4 +540,3 @@ def unregister(name: str) -> None:
         for key, (_, loaded) in list(_LOADED.items()):
             if name in loaded:
                 del _LOADED[key]
-

@@ -32,7 +32,8 @@ from app.run_spec import (
     RunSpec,
     length,
 )
-from controller.params import LATERAL_MODES, METHODS, ControllerParams
+from controller import strategy
+from controller.params import LATERAL_MODES, ControllerParams
 
 __all__ = [  # the run's own names, for the modules and tests that read them here
     "DISTURBANCE",
@@ -108,7 +109,7 @@ class Study:
     figure_lengths: tuple[float, ...] = paper.FIGURE_LENGTHS  # waist, yaw momentum
     kappa_lengths: tuple[float, ...] = paper.KAPPA_LENGTHS  # Fig. 13
     zmp_length: float = paper.ZMP_LENGTH  # Fig. 15
-    methods: tuple[str, ...] = field(default=METHODS)
+    methods: tuple[str, ...] = field(default=strategy.BUILTINS)
     overrides: tuple[Override, ...] = ()  # applied to every run (a sweep's cell)
     sensitivity: Sensitivity | None = None  # section 8 (None: not run)
     pushes: Pushes | None = None  # the robustness section's push survival (None: not run)

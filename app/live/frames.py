@@ -55,6 +55,8 @@ class RobotFrame:
     step_length: float  # [m] length of the step in progress (the one in force)
     fell: bool
     fall_reason: str | None
+    error: str | None  # its pelvis strategy failed (message, file and line): it stopped, the
+    # others walk on; the session restarts it with them at their next restart
     fell_clock: float | None  # [s] session clock of the fall: it is shown down from then
     # until the session restarts every robot (FALL_HOLD_S later, app.live.session)
     finished: bool  # walked its whole plan and stands (the session then restarts them all)
@@ -62,6 +64,7 @@ class RobotFrame:
     falls: int
     last_walk_success: bool | None  # outcome of the last finished or failed walk
     waiting: bool  # restarted robot standing by to start in phase with the others
+    strategy_ms: float  # [ms] its strategy's waist_rate call lately (decaying peak)
     body_xpos: np.ndarray  # (nbody, 3) [m] MuJoCo body positions
     body_xmat: np.ndarray  # (nbody, 3, 3) body orientations
     hips: np.ndarray  # (2, 3) [m] left, right hip points (measured)
@@ -90,12 +93,14 @@ class RobotFrame:
 
     @property
     def status(self) -> str:
-        """One badge: fell / knee nearly straight / IK at the speed limit / clean.
+        """One badge: stopped / fell / knee nearly straight / IK at the speed limit / clean.
 
         The same test as the study's *clean* (``app/runs.py``): the knee is "nearly straight"
         when kappa(J) of the leg columns reaches KAPPA_SINGULAR, so a robot the report calls
         clean never shows another badge live. The reach gauges show the leg's extension
         continuously (red near 1) for the eye."""
+        if self.error is not None:
+            return "stopped"
         if self.fell:
             return "fell"
         if self.kappa_legs >= KAPPA_SINGULAR:
@@ -194,14 +199,16 @@ def robot_frame(
         in_dsp=bool(out is not None and not out.in_ssp and 0 <= step_index < plan.n),
         swing_side=int(out.swing_side) if out is not None else -1,
         step_length=plan.step_length(step_index),
-        fell=session.fell or error is not None,
-        fall_reason=error or session.fall_reason,
+        fell=session.fell,
+        fall_reason=session.fall_reason,
+        error=error,
         fell_clock=fell_clock,
         finished=bool(session.walker.finished and not session.fell and error is None),
         walks_completed=walks,
         falls=falls,
         last_walk_success=last_success,
         waiting=waiting,
+        strategy_ms=session.strategy_ms_recent,
         body_xpos=data.xpos.astype(np.float32),
         body_xmat=data.xmat.reshape(-1, 3, 3).astype(np.float32),
         hips=data.xpos[_body_ids(model, HIP_BODIES)].copy(),

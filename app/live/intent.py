@@ -14,9 +14,10 @@ import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from controller.params import METHODS, ControllerParams
+from controller import strategy
+from controller.params import ControllerParams
 
-DEFAULT_METHODS: tuple[str, ...] = ("fixed", "redundancy", "mpc")  # the three compared
+DEFAULT_METHODS: tuple[str, ...] = strategy.BUILTINS  # the paper's three, compared
 SPEED_MIN, SPEED_MAX = 0.1, 4.0  # playback speed range (x real time)
 STEP_UNTIL = ("tick", "liftoff", "landing")  # what a single step advances to
 PUSH_FORCE_MAX = 300.0  # [N] largest horizontal push (about 0.6 body weights)
@@ -58,14 +59,15 @@ class Intent:
 
 
 def check_methods(methods: Sequence[str]) -> tuple[str, ...]:
-    """Validated, de-duplicated methods in the canonical order; ValueError otherwise."""
+    """Validated, de-duplicated robots (registered strategies) in the registry's order (the
+    paper's three first); ValueError otherwise."""
     methods = tuple(methods)
-    bad = [m for m in methods if m not in METHODS]
+    bad = [m for m in methods if not strategy.is_registered(m)]
     if bad:
-        raise ValueError(f"unknown method {bad[0]!r}: choose from {', '.join(METHODS)}")
+        raise ValueError(f"unknown method {bad[0]!r}: choose from {', '.join(strategy.names())}")
     if not methods:
         raise ValueError("choose at least one method")
-    return tuple(m for m in METHODS if m in methods)
+    return strategy.ordered(methods)
 
 
 def check_speed(speed: float) -> float:

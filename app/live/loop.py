@@ -35,8 +35,10 @@ same clock: each one sleeps while ahead of it and runs flat out while behind.
 
 Live choices: plans are long (``LIVE_STEPS``). A robot that falls stops its controller and
 lies where it fell (its servos hold the last targets while the physics runs on), marked in
-its frames (``fell_clock``); a robot whose plan ends stands still the same way. The loop
-never restarts a robot alone: the session restarts all of its robots together
+its frames (``fell_clock``); a robot whose plan ends stands still the same way, and so does
+one whose pelvis strategy failed (``error``: a user's code raised or returned no rate; the
+message names their file and line) while the others walk on. The loop never restarts a robot
+alone: the session restarts all of its robots together
 (:meth:`app.live.session.SessionView.receive`, ``FALL_HOLD_S`` after a fall, or once every
 robot finished), so side-by-side robots always compare the same instants. A reset or a
 change of methods rebuilds all robots, which start walking together at the intent's
@@ -62,6 +64,7 @@ from app.live.intent import Intent
 from app.sim.session import RunConfig, Session
 from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
+from controller.strategy import StrategyError
 
 log = logging.getLogger(__name__)
 
@@ -85,8 +88,8 @@ class _Robot:
     falls: int = 0  # since the last restart asked for (kept through the session's own)
     walks_completed: int = 0
     last_walk_success: bool | None = None
-    error: str | None = None  # the controller raised: shown down like a fall
-    fell_clock: float | None = None  # session clock of its fall (or error)
+    error: str | None = None  # its strategy (or controller) failed: it stops, the others go on
+    fell_clock: float | None = None  # session clock of its fall
     finished_clock: float | None = None  # session clock at which its plan ended
     waiting_since: float | None = None  # session clock when it began standing by
     ref: tuple[FootstepPlan, float] | None = None  # the plan to keep in phase with, and the
@@ -96,7 +99,7 @@ class _Robot:
 
     @property
     def fell(self) -> bool:
-        return self.session.fell or self.error is not None
+        return self.session.fell
 
     @property
     def waiting(self) -> bool:
@@ -104,8 +107,11 @@ class _Robot:
 
     @property
     def held(self) -> bool:
-        """Down after a fall, or standing at the end of its plan: no controller runs."""
-        return self.fell_clock is not None or self.finished_clock is not None
+        """Down after a fall, standing at the end of its plan or stopped by an error: no
+        controller runs."""
+        return (
+            self.fell_clock is not None or self.finished_clock is not None or self.error is not None
+        )
 
     def two_step_energy(self) -> float:
         """The last completed two-step window's energy [J] (the quantity of Table 1)."""
@@ -364,9 +370,18 @@ class LiveLoop:
             return
         try:
             s.tick()
+        except StrategyError as exc:  # a user's mistake, not the server's: one line
+            log.warning("robot %s stopped: %s", robot.method, exc)
+            robot.error = str(exc)
+            robot.last_walk_success = False
+            self._hold(robot)  # this period's physics, the servos on the last targets
+            return
         except Exception as exc:  # noqa: BLE001 - one robot's failure must not stop the loop
             log.exception("robot %s: controller tick failed", robot.method)
             robot.error = f"{type(exc).__name__}: {exc}"
+            robot.last_walk_success = False
+            self._hold(robot)
+            return
         # marked at once: a frame never shows a fall without its time, nor a finished walk
         # uncounted (the session restarts every robot from the frame that shows them all
         # finished, and the restart can be applied before this robot's next tick)

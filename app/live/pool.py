@@ -35,6 +35,7 @@ from app.live.intent import Intent, check_methods
 from app.live.loop import PUBLISH_HZ
 from app.live.session import KEEP_S, SessionView
 from app.live.worker import FrameCodec, worker_main
+from controller import strategy
 
 ALIGN_S = 3.0  # [s] of each part's frames kept to show all robots at one instant
 
@@ -241,7 +242,8 @@ class WorkerPool:
         try:
             proc = self._ctx.Process(
                 target=worker_main,
-                args=(cmd_recv, frm_send, self.publish_hz),
+                # a user's strategies (serve --strategy): the worker loads the same files
+                args=(cmd_recv, frm_send, self.publish_hz, strategy.user_sources()),
                 name=f"pelvic-walk-worker-{index}",
                 daemon=True,
             )

@@ -245,8 +245,11 @@ class SessionView:
             for r in frame.robots
             if r.fell and r.fell_clock is not None and not r.waiting
         ]
-        due = any(frame.clock >= c + FALL_HOLD_S - 1e-9 for c in fallen) or all(
-            r.finished for r in frame.robots
+        # a robot stopped by its strategy's error neither restarts the others (its error would
+        # come back every few seconds) nor holds them back when they finish
+        going = [r for r in frame.robots if r.error is None]
+        due = any(frame.clock >= c + FALL_HOLD_S - 1e-9 for c in fallen) or bool(
+            going and all(r.finished for r in going)
         )
         if not due:
             return

@@ -28,6 +28,7 @@ import numpy as np
 from app.live.frames import LiveFrame
 from app.live.intent import Intent
 from app.live.loop import LiveLoop
+from controller import strategy
 
 log = logging.getLogger(__name__)
 
@@ -164,9 +165,14 @@ class Outbox:
                     os._exit(0)  # the web process is gone
 
 
-def worker_main(commands: Connection, frames: Connection, publish_hz: float) -> None:
-    """Entry point of a worker process: serve commands until told to stop or orphaned."""
+def worker_main(
+    commands: Connection, frames: Connection, publish_hz: float, strategies: tuple[str, ...] = ()
+) -> None:
+    """Entry point of a worker process: serve commands until told to stop or orphaned.
+    ``strategies``: the files of a user's strategies the web process loaded (``serve
+    --strategy``), loaded here too so the robots' names mean the same classes."""
     logging.basicConfig(level=logging.WARNING)
+    strategy.load_files(strategies)
     # The web process stops its workers (Ctrl-C reaches the whole process group): ignore
     # the signals; a worker also ends when the web process's pipe closes.
     signal.signal(signal.SIGINT, signal.SIG_IGN)

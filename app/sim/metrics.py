@@ -46,6 +46,7 @@ COLUMNS = (
     "energy",  # [J] cumulative positive joint work (eq. 44), 200 Hz samples
     "energy_substep",  # [J] the same from every 1 ms substep
     "tick_ms",  # [ms] controller tick time
+    "strategy_ms",  # [ms] of it, the pelvis strategy's waist_rate call
     "step_index",
     "in_ssp",
     "speed_limited",  # 1 if a joint velocity sat at the IK's speed limit

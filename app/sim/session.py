@@ -25,6 +25,7 @@ from controller.footsteps import FootstepPlan
 from controller.jit import kernel
 from controller.kinematics import RobotKinematics
 from controller.params import ControllerParams
+from controller.strategy import StrategyError
 from controller.walker import TickOutput, Walker
 from models.dyros_jet import ROBOT_XML
 
@@ -132,6 +133,13 @@ class Session:
         self.fell = False
         self.fall_time: float | None = None
         self.fall_reason: str | None = None
+        # the pelvis strategy raised or returned no rate (its file and line): the walker
+        # stopped at error_time; only this robot stops
+        self.error: str | None = None
+        self.error_time: float | None = None
+        # [ms] the strategy's waist_rate call lately: a peak that decays (half-life 0.7 s), for
+        # the live label (a strategy slower than the tick cannot run in real time)
+        self.strategy_ms_recent = 0.0
         self.landings: dict[int, float] = {}  # step index -> landing error [m]
         self._landing_key: tuple[FootstepPlan, int, float] | None = None  # plan, step, time
         # step index -> cumulative energy per joint at its start: (200 Hz, substep) [J]
@@ -162,7 +170,7 @@ class Session:
 
     @property
     def done(self) -> bool:
-        return self.fell or self.walker.finished
+        return self.fell or self.error is not None or self.walker.finished
 
     def push(self, force_xy: np.ndarray, duration: float) -> None:
         """A horizontal push [N] on the torso for ``duration`` [s] from the next period."""
@@ -178,8 +186,13 @@ class Session:
             world.push(force, self.cfg.disturbance_period)
         self._ticks += 1
         t0 = clock()
-        out = w.tick(q_meas)
+        try:
+            out = w.tick(q_meas)
+        except StrategyError as exc:  # the strategy's fault: this robot stops here
+            self.error, self.error_time = str(exc), w.t
+            raise
         t1 = clock()
+        self.strategy_ms_recent = max(out.strategy_s * 1e3, self.strategy_ms_recent * 0.995)
         world.step(out.q_target)
         t2 = clock()
         self.last, self._measured, self._waist_meas = out, None, float(q_meas[0])
@@ -269,6 +282,7 @@ class Session:
         row[c.energy] = m.energy
         row[c.energy_substep] = m.energy_substep
         row[c.tick_ms] = tick_ms
+        row[c.strategy_ms] = out.strategy_s * 1e3
         row[c.step_index] = out.step_index
         row[c.in_ssp] = out.in_ssp
         row[c.speed_limited] = out.speed_limited

@@ -82,9 +82,16 @@ def summarize(session: Session) -> dict[str, Any]:
     windows_substep = session.energy_windows(substep=True).sum(axis=1)
     tick = s.column("tick_ms")
     tick = tick[np.isfinite(tick)] if len(tick) else np.zeros(1)
+    strategy_ms = s.column("strategy_ms")
+    strategy_ms = strategy_ms[np.isfinite(strategy_ms)] if len(strategy_ms) else np.zeros(1)
     sim_time = float(session.t)
     failures = sum(session.walker.failure_counts.values())
-    success = (not session.fell) and session.walker.finished and len(session.landings) == plan.n
+    success = (
+        (not session.fell)
+        and session.error is None
+        and session.walker.finished
+        and len(session.landings) == plan.n
+    )
     margin = s.column("balance_margin")[walking]
     margin = margin[np.isfinite(margin)]
     tilt = s.column("sole_tilt")[walking]
@@ -118,6 +125,12 @@ def summarize(session: Session) -> dict[str, Any]:
         "tick_ms_p99": float(np.percentile(tick, 99)),
         # further keys (docs/REFERENCE.md, "simulate JSON", the further keys):
         "fall_reason": session.fall_reason,
+        # the pelvis strategy's fault ("ZeroDivisionError: ... (my_pelvis.py:14)") and when
+        "strategy_error": session.error,
+        "strategy_error_time": session.error_time,
+        # [ms] its waist_rate calls: a strategy slower than the 5 ms tick cannot run live
+        "strategy_ms_median": float(np.median(strategy_ms)) if len(strategy_ms) else 0.0,
+        "strategy_ms_max": float(np.max(strategy_ms)) if len(strategy_ms) else 0.0,
         "servo_saturation_substeps": int(world.saturated_substeps),
         "speed_limited_ticks": int(session.speed_limited_ticks),
         "solver_failures_by_layer": dict(session.walker.failure_counts),

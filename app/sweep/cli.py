@@ -17,7 +17,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any, NoReturn
 
-from app.params_cli import positive_int, split_list
+from app.params_cli import add_strategy_argument, positive_int, split_list
 from app.sweep.grid import (
     MEASURES,
     Grid,
@@ -58,8 +58,9 @@ def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         metavar="METHOD",
         help="walking methods, separated by commas or spaces (default: the grid file's, else "
-        "fixed redundancy mpc)",
+        "fixed redundancy mpc and every --strategy)",
     )
+    add_strategy_argument(parser)
     parser.add_argument(
         "--measure",
         default=None,

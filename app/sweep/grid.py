@@ -27,7 +27,8 @@ from typing import Any
 
 from app.params_cli import parse_assignment, split_list
 from app.run_spec import RunSpec
-from controller.params import METHODS, ControllerParams
+from controller import strategy
+from controller.params import ControllerParams
 
 MEASURES = ("limit", "summary")
 DEFAULT_MEASURE = "limit"
@@ -143,11 +144,11 @@ def _axis(name: str, values: Sequence[Any]) -> Axis:
 
 
 def check_methods(methods: Iterable[Any]) -> tuple[str, ...]:
-    """The methods, each one of ``controller.params.METHODS``, none twice."""
+    """The methods, each a registered strategy (``controller.strategy``), none twice."""
     out: list[str] = []
     for m in methods:
-        if m not in METHODS:
-            raise GridError(f"unknown method {m!r} (one of: {', '.join(METHODS)})")
+        if not strategy.is_registered(m):
+            raise GridError(f"unknown method {m!r} (one of: {', '.join(strategy.names())})")
         if m in out:
             raise GridError(f"the method {m!r} is given twice")
         out.append(m)
@@ -190,7 +191,7 @@ def make_grid(
     grid = Grid(
         axes=tuple(axes),
         fixed=tuple(fixed),
-        methods=check_methods(METHODS if methods is None else methods),
+        methods=check_methods(strategy.names() if methods is None else methods),
         measure=measure,
     )
     return grid

@@ -38,7 +38,7 @@ from app.web.lessons import PRESETS, warnings_for
 from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.record_gui import RecordFolder
-from app.web.scene import LAYERS, fall_note
+from app.web.scene import LAYERS, SLOW_STRATEGY_MS, fall_note
 from controller.params import GROUP_TITLES, GROUPS, METHODS, ControllerParams, spec
 
 if TYPE_CHECKING:
@@ -447,6 +447,12 @@ class ControlPanel:
     def _update_status(self, frame: LiveFrame, playback: Playback, intent: Any) -> None:
         lines = [playback.describe()]
         for r in frame.robots:
+            if r.error is not None:
+                lines.append(
+                    f"**{METHOD_INFO[r.method].title}**: ⚠ stopped: `{r.error}`; it restarts "
+                    "with the others (or press Reset)"
+                )
+                continue
             if r.fell:
                 when, why, restart = fall_note(r, frame)
                 lines.append(f"**{METHOD_INFO[r.method].title}**: ⚠ fell {when}, {why}; {restart}")
@@ -460,8 +466,15 @@ class ControlPanel:
             kappa = (  # no "kappa -" while there is nothing to measure (standing by)
                 f"kappa {kappa_text(r.kappa_legs)}, " if math.isfinite(r.kappa_legs) else ""
             )
+            slow = (
+                f", ⚠ its strategy takes {r.strategy_ms:.1f} ms a tick (more than the "
+                f"{r.params.control_dt * 1e3:g} ms tick: it cannot keep real time)"
+                if r.strategy_ms > SLOW_STRATEGY_MS
+                else ""
+            )
             lines.append(
-                f"**{METHOD_INFO[r.method].title}**: {r.status}, {kappa}{state}, falls {r.falls}"
+                f"**{METHOD_INFO[r.method].title}**: {r.status}, {kappa}{state}, falls "
+                f"{r.falls}{slow}"
             )
         lines += [f"⚠ {w}" for w in warnings_for(intent.params, intent.methods)]
         extra = self.view.alerts()

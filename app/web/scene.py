@@ -441,10 +441,24 @@ def fall_note(r: RobotFrame, frame: LiveFrame) -> tuple[str, str, str]:
     return when, why, restart
 
 
+# [ms] a strategy whose waist_rate takes longer than a control period cannot run live: said on
+# its label (the tick is 5 ms, and the other layers need their share of it)
+SLOW_STRATEGY_MS = 5.0
+
+
+def wrap(text: str, width: int = 48) -> str:
+    """``text`` on lines of at most about ``width`` characters (a label's lines)."""
+    import textwrap
+
+    return "\n".join(textwrap.wrap(text, width)) or text
+
+
 def label_text(r: RobotFrame, frame: LiveFrame) -> str:
     """Method, status badge and live numbers, above the robot; when it fell, when and why,
     and when the session restarts every robot."""
     head = METHOD_INFO[r.method].title
+    if r.error is not None:
+        return f"⚠ {head} STOPPED\n{wrap(r.error)}\nrestarts with the others (or Reset)"
     if r.fell:
         when, why, restart = fall_note(r, frame)
         return f"⚠ {head} FELL {when}\n{why}\n{restart}"
@@ -453,6 +467,8 @@ def label_text(r: RobotFrame, frame: LiveFrame) -> str:
     if r.finished:
         return f"{head} · walked its whole plan\nall robots restart together"
     reach = r.reach
+    if r.strategy_ms > SLOW_STRATEGY_MS:
+        head = f"{head} · slow: {r.strategy_ms:.0f} ms a tick"
     return (
         f"{head} · {r.status}\nstep {max(r.step_index, 0)} · {r.step_length:.2f} m · "
         f"waist {math.degrees(r.waist_angle):+.0f}°\nreach left {reach[0]:.2f} · right "

@@ -40,6 +40,7 @@ from typing import Any
 import viser
 from pydantic import ValidationError
 
+from app.live.intent import DEFAULT_METHODS
 from app.live.pool import WorkerPool
 from app.live.registry import SessionRegistry
 from app.live.session import initial_intent
@@ -47,6 +48,7 @@ from app.web.api import create_app
 from app.web.auth import Instructor, redact_logs
 from app.web.settings import Settings, worker_layout
 from app.web.view import Display
+from controller import strategy
 
 log = logging.getLogger(__name__)
 
@@ -127,12 +129,15 @@ def serve(
     methods: list[str] | None = None,
     shared_demo: bool | None = None,
     instructor_token: str | None = None,
+    strategies: list[str] | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
     Unset arguments come from :class:`~app.web.settings.Settings` (environment
     ``PELVIC_WALK_*``). ``report_dir``: what ``/report`` shows (default: the latest
     ``pelvic-walk experiments`` output, else the packaged reference report).
+    ``strategies``: a user's strategy files (``--strategy``), already loaded by the command
+    line (else loaded here); each adds a robot to the default ``methods``.
     """
     import uvicorn
 
@@ -167,7 +172,11 @@ def serve(
         return _fail("--no-shared-demo needs --sessions private (else nothing would run)")
     secret = settings.instructor_token
     instructor = Instructor(secret.get_secret_value() if secret is not None else None)
-    intent = initial_intent(methods=methods) if methods else initial_intent()
+    try:
+        loaded = strategy.load_files(strategies or [])
+    except strategy.StrategyLoadError as exc:
+        return _fail(f"--strategy {exc}")
+    intent = initial_intent(methods=methods or (*DEFAULT_METHODS, *loaded))
     if settings.shared_demo and workers and len(intent.methods) > workers * robots_per_worker:
         return _fail(
             f"{workers} worker(s) x {robots_per_worker} robot(s) cannot hold the"
