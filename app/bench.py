@@ -62,6 +62,7 @@ from app.runs import RunConfig, Session
 from app.sim.world import JOINTS, World
 from controller.params import ControllerParams
 from controller.qp import INF, QP, QpSolver, frozen
+from controller.strategy import PelvisMpcStrategy
 
 STEP_LENGTH = 0.3  # [m]
 METHOD = "mpc"
@@ -254,16 +255,18 @@ def record_qps(ticks: int) -> dict[str, list[QP]]:
     w = session.walker
     record: dict[str, list[QP]] = {name: [] for name in QP_LAYERS}
     recording = [False]
+    for _ in range(_warmup_ticks(session)):
+        session.tick()
+    mpc = w.strategy.strategy  # the paper's method (bench_params): it built its MPC at tick 1
+    assert isinstance(mpc, PelvisMpcStrategy) and mpc.mpc is not None
     solvers = {
         "com_mpc": w.com_mpc.solver,
-        "pelvis_mpc": w.pelvis_mpc.solver,
+        "pelvis_mpc": mpc.mpc.solver,
         "ik": w.ik_solver,
         "arm_swing": w.arm_solver,
     }
     for name, solver in solvers.items():
         _wrap(solver, record[name], recording)
-    for _ in range(_warmup_ticks(session)):
-        session.tick()
     recording[0] = True
     for _ in range(ticks):
         session.tick()

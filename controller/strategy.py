@@ -303,7 +303,7 @@ def info(name: str) -> StrategyInfo:
     """The registered strategy ``name``; ValueError with the choices otherwise."""
     entry = _REGISTRY.get(name)
     if entry is None:
-        raise ValueError(f"unknown strategy {name!r}: choose from {', '.join(_REGISTRY)}")
+        raise ValueError(f"unknown method {name!r}: choose from {', '.join(_REGISTRY)}")
     return entry
 
 

@@ -79,7 +79,8 @@ def test_every_lesson_names_the_paper_and_is_shown_live():
     from app.web.learn_gui import COLUMNS
     from app.web.lesson_math import EQUATIONS
     from app.web.lessons import LESSONS
-    from controller.params import METHODS, ControllerParams
+    from controller.params import ControllerParams
+    from controller.strategy import BUILTINS as METHODS
 
     assert len(LESSONS) >= 6
     for lesson in LESSONS:

@@ -13,7 +13,7 @@ import app.pushes as pushes
 from app.cli import main as cli_main
 from app.live.intent import PUSH_FORCE_MAX
 from app.sim.world import World
-from controller.params import METHODS
+from controller.strategy import BUILTINS as METHODS
 
 SHORT = {"n_steps": 4, "step": 2}  # push mid-SSP of the third step, two more to recover
 MASS = mujoco.mj_getTotalmass(World().model)  # [kg]

@@ -7,9 +7,8 @@ import threading
 
 from app.live import LiveSim
 from app.runs import RunConfig, run, summarize
+from app.sim.summary import TIMING_KEYS
 from controller.params import ControllerParams
-
-TIMING_KEYS = {"wall_time", "realtime_factor", "tick_ms_median", "tick_ms_p99"}
 
 
 def _same(a, b, path="summary") -> None:

@@ -38,7 +38,7 @@ from app.sweep.measure import (
     threshold_of,
     walks,
 )
-from controller.params import METHODS
+from controller.strategy import BUILTINS as METHODS
 
 TINY = [
     "--set",

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.run_spec import RunSpec
 from app.runs import SUMMARY_KEYS, RunConfig, Session, run, summarize
 from controller.params import ControllerParams
 
@@ -95,7 +96,9 @@ def test_bad_parameters_are_rejected_before_anything_starts():
     with pytest.raises(ValueError, match="step_length"):
         ControllerParams().replace(walk=dict(step_length=float("nan")))
     with pytest.raises(ValueError, match="method"):
-        ControllerParams().replace(method="sideways")
+        ControllerParams().replace(method="")
+    with pytest.raises(ValueError, match="unknown method 'sideways': choose from fixed"):
+        RunSpec("sideways", 0.3, 3)  # a robot is made of registered strategies only
     with pytest.raises(ValueError, match="horizon"):
         ControllerParams().replace(com=dict(horizon=0.05, sample_time=0.1))
 
@@ -135,7 +138,11 @@ def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
     from controller.qp import QpResult
 
     session = Session(RunConfig(params=_params("mpc", 0.2, 3)))
-    owner = getattr(session.walker, layer)
+    if layer == "pelvis_mpc":  # the MPC strategy's own, built at its first tick
+        session.tick()
+        owner = session.walker.strategy.strategy.mpc
+    else:
+        owner = getattr(session.walker, layer)
     solver = owner if layer.endswith("_solver") else owner.solver
     real_solve = solver.solve
     calls = {"n": 0}

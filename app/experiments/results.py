@@ -25,18 +25,11 @@ from app.experiments.sensitivity import SensitivitySection
 from app.experiments.waist import LateralSection, WaistSection
 from app.experiments.yaw import YawSection
 from app.run_spec import RunSpec
+from app.sim.summary import TIMING_KEYS as RUN_TIMING_KEYS
 
 # keys whose values measure time or the machine, not the robot: they differ between two runs
 # of the same study (on any backend)
-TIMING_KEYS = (
-    "meta",
-    "wall_s",
-    "wall_time",
-    "realtime_factor",
-    "tick_ms_median",
-    "tick_ms_p99",
-    "duration_s",
-)
+TIMING_KEYS = ("meta", "wall_s", "duration_s", *RUN_TIMING_KEYS)
 
 
 @dataclass(frozen=True)

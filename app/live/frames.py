@@ -37,6 +37,7 @@ class Horizon:
     theta_ref: np.ndarray  # (N,) [rad] reference pelvic angle (eq. 30-33)
     theta: np.ndarray  # (N,) [rad] the pelvic MPC's optimised angle (eq. 35); for the other
     # methods the commanded angle now, held
+    planned: bool  # theta is a plan over the horizon (a strategy that optimises: the MPC)
     lateral: np.ndarray  # (N, 2) [m] pelvis-to-foot lateral distance used by eq. (31)-(32)
     com_height: float  # [m] the LIPM's constant CoM height
 
@@ -168,6 +169,7 @@ def horizon_of(session: Session) -> Horizon | None:
         right_foot=ps.p_right[h, :2].copy(),
         theta_ref=out.theta_ref.copy(),
         theta=theta.copy(),
+        planned=out.pelvis_plan is not None,
         lateral=out.lateral.copy(),
         com_height=session.walker.com_height,
     )

@@ -55,6 +55,16 @@ SUMMARY_KEYS = (
     "tick_ms_median",
     "tick_ms_p99",
 )
+# keys that measure the machine and its load, not the robot: two runs of the same walk
+# differ in these only
+TIMING_KEYS = (
+    "wall_time",
+    "realtime_factor",
+    "tick_ms_median",
+    "tick_ms_p99",
+    "strategy_ms_median",
+    "strategy_ms_max",
+)
 DEG = 180.0 / np.pi
 
 

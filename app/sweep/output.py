@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from app.methods import METHOD_INFO
+from app.sim.summary import TIMING_KEYS
 from app.sweep.grid import Grid
 from app.sweep.measure import (
     LIMIT_COLUMNS,
@@ -44,7 +45,7 @@ TABLE_JSONL = "sweep.jsonl"
 GRID_JSON = "grid.json"
 FIGURES = "figures"
 # Columns that measure time, not the robot: they differ from one sweep to the next.
-TIMING_COLUMNS = ("wall_s", "wall_time", "realtime_factor", "tick_ms_median", "tick_ms_p99")
+TIMING_COLUMNS = ("wall_s", *TIMING_KEYS)
 # quantity -> (label, unit, log colour scale)
 QUANTITIES: dict[str, dict[str, tuple[str, str, bool]]] = {
     "limit": {

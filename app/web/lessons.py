@@ -14,7 +14,7 @@ from typing import Any
 
 from app.live import FALL_HOLD_S
 from app.web.lesson_math import analysis_html, analysis_svg, equations
-from controller.params import METHODS
+from controller.strategy import BUILTINS
 
 __all__ = [
     "CLEAN_LIMIT_M",
@@ -284,7 +284,7 @@ EXPLAIN: dict[str, str] = {
 }
 
 
-def warnings_for(params: Any, methods: tuple[str, ...] = METHODS) -> list[str]:
+def warnings_for(params: Any, methods: tuple[str, ...] = BUILTINS) -> list[str]:
     """Settings known to break walking, explained in one line each (empty when none), for
     the robots shown (``methods``)."""
     w = params.walk
@@ -303,7 +303,7 @@ def warnings_for(params: Any, methods: tuple[str, ...] = METHODS) -> list[str]:
     if params.pelvis.k_pel == 0.0 and "mpc" in methods:
         out.append("k_pel = 0: the reference pelvic angle is 0, the MPC plans no rotation.")
     names = {"fixed": "fixed", "redundancy": "redundancy", "mpc": "MPC"}
-    shown = [m for m in METHODS if m in methods]
+    shown = [m for m in BUILTINS if m in methods]  # the limits measured: the paper's three
     beyond = [m for m in shown if w.step_length > CLEAN_LIMIT_M[m] + 1e-9]
     if beyond:
         limits = ", ".join(f"{names[m]} {CLEAN_LIMIT_M[m]:.2f} m" for m in shown)

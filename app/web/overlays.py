@@ -148,10 +148,11 @@ def robot_prediction(r: RobotFrame, y: np.ndarray) -> list[tuple[np.ndarray, tup
 
 
 def robot_hip_lines(r: RobotFrame, y: np.ndarray) -> list[tuple[np.ndarray, tuple[int, int, int]]]:
-    """The hip lines on the floor, (segments, colour) pairs: the MPC robot's optimised theta
-    (PREDICTED, solid) and its reference theta_ref (REFERENCE, dashed and longer, so both show
-    where they coincide) at every HIP_EVERY-th predicted sample; the redundancy robot's hip
-    line now (it plans none); none for the fixed pelvis."""
+    """The hip lines on the floor, (segments, colour) pairs: a robot that plans its pelvic
+    angle (the MPC) shows its optimised theta (PREDICTED, solid) and its reference theta_ref
+    (REFERENCE, dashed and longer, so both show where they coincide) at every HIP_EVERY-th
+    predicted sample; one that turns without a plan (redundancy, most of a user's) its hip
+    line now; a pelvis that does not turn (the fixed one) none."""
     hz = r.horizon
     if hz is None:
         return []
@@ -160,13 +161,13 @@ def robot_hip_lines(r: RobotFrame, y: np.ndarray) -> list[tuple[np.ndarray, tupl
         hp = hip_points(p + y, theta, half)  # (N, 2, 2)
         return np.concatenate([hp, np.full((len(theta), 2, 1), FLOOR_Z + 0.006)], axis=2)
 
-    if r.method == "mpc":
+    if hz.planned:
         k = slice(HIP_EVERY - 1, None, HIP_EVERY)
         return [
             (bars(hz.com, hz.theta)[k], PREDICTED),
             (dashed(bars(hz.com, hz.theta_ref, 1.5 * HIP_BAR)[k]), REFERENCE),
         ]
-    if r.method == "redundancy":
+    if abs(r.waist_angle_cmd) > 1e-9:
         return [(bars(r.com[None, :2], np.array([r.waist_angle_cmd])), PREDICTED)]
     return []
 

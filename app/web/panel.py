@@ -39,7 +39,8 @@ from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.record_gui import RecordFolder
 from app.web.scene import LAYERS, SLOW_STRATEGY_MS, fall_note
-from controller.params import GROUP_TITLES, GROUPS, METHODS, ControllerParams, spec
+from controller import strategy
+from controller.params import GROUP_TITLES, GROUPS, ControllerParams, spec
 
 if TYPE_CHECKING:
     from app.web.host import ViewHost
@@ -187,7 +188,7 @@ class ControlPanel:
             sticks.on_update(lambda _e: self.view.scene.set_sticks(sticks.value))
             gui.add_html(legend_html())
         with gui.add_folder("Compare"):
-            for method in METHODS:
+            for method in strategy.names():  # the paper's three, then the server's own
                 box = self.writer(
                     gui.add_checkbox(METHOD_INFO[method].title, method in intent.methods)
                 )

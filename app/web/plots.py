@@ -20,6 +20,7 @@ from app.live.session import SessionView
 from app.methods import METHOD_INFO
 from app.sim.metrics import KAPPA_SINGULAR
 from app.web.overlays import DANGER, MEASURED, PLAN, PREDICTED, REFERENCE
+from controller import strategy
 
 PLOT_HZ = 1.0  # live plot updates per second while running (each carries its whole window)
 INSPECTOR_HZ = 4.0  # horizon inspector updates per second while running
@@ -224,7 +225,7 @@ class HorizonInspector:
 
     def __init__(self, gui: Any):
         self.gui = gui
-        self.robot = gui.add_dropdown("Robot", ("mpc",), initial_value="mpc")
+        self.robot = gui.add_dropdown("Robot", (strategy.MPC,), initial_value=strategy.MPC)
         self.robot.on_update(lambda _e: self._invalidate())
         self.caption = gui.add_markdown("")
         pred, ref, plan = css(PREDICTED), css(REFERENCE), css(PLAN)
@@ -299,7 +300,7 @@ class HorizonInspector:
         if tuple(self.robot.options) != methods and methods:
             self.robot.options = methods
             if self.robot.value not in methods:
-                self.robot.value = "mpc" if "mpc" in methods else methods[0]
+                self.robot.value = strategy.MPC if strategy.MPC in methods else methods[0]
         r = frame.robot(self.robot.value) if methods else None
         if r is None or r.horizon is None:
             return
@@ -354,7 +355,7 @@ class HorizonInspector:
 def theta_note(r: Any, theta: np.ndarray, theta_ref: np.ndarray) -> str:
     """Why theta and theta_ref coincide (or not), from the weights in force, with the largest
     difference over the horizon [deg]."""
-    if r.method != "mpc":
+    if r.horizon is None or not r.horizon.planned:
         return (
             "Only the MPC robot plans its pelvic angle: for this robot theta is the commanded "
             "angle now, held over the horizon."

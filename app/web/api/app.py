@@ -18,6 +18,7 @@ from app.web.api.pages import mount_docs_assets, pages_router
 from app.web.api.recording import recording_router
 from app.web.api.runs import RunManager, runs_router
 from app.web.api.sessions import resolvers, sessions_router
+from app.web.api.strategies import strategies_router
 from app.web.auth import Instructor
 from controller.params import GROUPS, ControllerParams, spec
 
@@ -112,6 +113,7 @@ def create_app(
         recording_router("/api", by_header),
         recording_router("/api/sessions/{sid}", by_path),
         runs_router(runs),
+        strategies_router(),
         pages_router(app, viser_port, reports, instructor, private=registry.mode == "private"),
     ):
         app.include_router(r)

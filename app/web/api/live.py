@@ -36,6 +36,7 @@ from app.web.api.models import (
     updates,
 )
 from app.web.auth import BEARER, Instructor
+from controller import strategy
 
 # How long a handler waits for the loop to take its intent before answering anyway (a
 # playback answer then says "applied": false): well under the 5 s clients often default to
@@ -65,6 +66,8 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
             "status": r.status,
             "fell": r.fell,
             "fall_reason": r.fall_reason,
+            "error": r.error,
+            "strategy_ms": r.strategy_ms,
             "fell_at": r.fell_clock,
             "finished": r.finished,
             "waiting": r.waiting,
@@ -111,7 +114,7 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
     """``GET /api/horizon``: one robot's plan over the horizon at the shown instant."""
     frame = _shown(session)
     shown = [r.method for r in frame.robots]
-    robot = frame.robot(method) if method else (frame.robot("mpc") or frame.robots[0])
+    robot = frame.robot(method) if method else (frame.robot(strategy.MPC) or frame.robots[0])
     if robot is None:
         raise unprocessable(f"no robot {method!r} is shown (robots: {', '.join(shown)})")
     h = robot.horizon

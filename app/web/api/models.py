@@ -5,14 +5,25 @@ as "horizon >= one MPC sample" come from its ``validated()``)."""
 
 from __future__ import annotations
 
-from typing import Any, Literal, cast
+from typing import Annotated, Any, Literal, cast
 
-from pydantic import BaseModel, ConfigDict, Field, create_model
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, create_model
 
 from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX, SPEED_MAX, SPEED_MIN, STEP_UNTIL
-from controller.params import GROUPS, METHODS, ControllerParams, spec
+from controller import strategy
+from controller.params import GROUPS, ControllerParams, spec
 
-MethodName = Literal[METHODS]  # type: ignore[valid-type]
+
+def _registered(name: str) -> str:
+    """A registered strategy's name (read at each request: the server's --strategy files
+    add to the built-ins); ValueError, hence 422 with the choices, otherwise."""
+    strategy.info(name)
+    return name
+
+
+# a robot: one of the paper's three methods or a strategy the server loaded (GET /api/strategies)
+MethodName = Annotated[str, AfterValidator(_registered)]
+METHODS_MAX = 16  # robots a request may name
 STRICT = ConfigDict(extra="forbid")
 # create_model(**fields): the values of a **dict must also fit its __config__, __base__... keywords
 Fields = dict[str, Any]
@@ -82,15 +93,23 @@ ParamsUpdate = create_model(
         Field(
             None,
             min_length=1,
-            max_length=len(METHODS),
-            description="methods to show live (fixed, redundancy, mpc)",
+            max_length=METHODS_MAX,
+            description="methods to show live: fixed, redundancy, mpc and the strategies the "
+            "server loaded (GET /api/strategies)",
         ),
     ),
 )
 RunRequest = create_model(
     "RunRequest",
     __config__=STRICT,
-    method=(MethodName, Field("mpc", description="walking method")),
+    method=(
+        MethodName,
+        Field(
+            strategy.MPC,
+            description="how the pelvis turns: fixed, redundancy, mpc or a strategy the server "
+            "loaded (GET /api/strategies)",
+        ),
+    ),
     seed=(
         cast(Any, int | None),
         Field(None, strict=True, description="seed of a small perturbation"),
@@ -161,9 +180,19 @@ class RobotState(BaseModel):
     step_index: int
     in_dsp: bool = Field(description="both feet down inside a step (double support)")
     step_length: float = Field(description="length of the step in progress [m]")
-    status: str = Field(description="clean / knee nearly straight / IK at the speed limit / fell")
+    status: str = Field(
+        description="clean / knee nearly straight / IK at the speed limit / fell / stopped"
+    )
     fell: bool
     fall_reason: str | None
+    error: str | None = Field(
+        description="its pelvis strategy failed (the message, with the file and line of the "
+        "strategy's code): this robot stopped, the others walk on"
+    )
+    strategy_ms: float = Field(
+        description="[ms] its strategy's waist_rate call lately (above the 5 ms control "
+        "period it cannot keep real time)"
+    )
     fell_at: float | None = Field(
         description="session clock of the fall [s]: the robot lies where it fell until the "
         "session restarts every robot, a few seconds later"
