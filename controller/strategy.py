@@ -70,6 +70,8 @@ class StrategyInputs(NamedTuple):
     left_sole_now: np.ndarray  # (3,) [m] planned left sole centre now
     right_sole_now: np.ndarray  # (3,) [m] planned right sole centre now
     support: str  # "left" or "right" (single support: the other foot swings) or "both"
+    swing: str | None  # the foot that swings in the step in progress, "left" or "right" (on
+    # the ground still in the step's double support); None while standing
     step: int  # the step in progress: -1 before the first, then 0, 1, ...
     phase: float  # progress through the single support, 0 at lift-off to 1 at touch-down (0
     # in the double support and before walking, 1 after the last step)

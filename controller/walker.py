@@ -284,7 +284,8 @@ class Walker:
                 _read_only(plan.p_right[h]),
                 _read_only(plan.p_left[0]),
                 _read_only(plan.p_right[0]),
-                _SUPPORT[int(plan.support_side[0])] if plan.in_ssp[0] else "both",
+                _SIDE[int(plan.support_side[0])] if plan.in_ssp[0] else "both",
+                _SIDE[int(plan.swing_side[0])] if plan.swing_side[0] >= 0 else None,
                 int(plan.step[0]),
                 float(plan.s_ssp[0]),
                 p,
@@ -453,7 +454,7 @@ class Walker:
         self.set_params(self.snapshot_params().replace(**groups))
 
 
-_SUPPORT = ("left", "right")  # StrategyInputs.support in single support, by support side
+_SIDE = ("left", "right")  # StrategyInputs.support and .swing by side (LEFT, RIGHT)
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
