@@ -57,7 +57,9 @@ def _live_t(box) -> float:
     return float(re.search(r"t = ([\d.]+) s", box.inner_text()).group(1))
 
 
-@pytest.mark.parametrize("i", range(len(LESSONS)), ids=[f"lesson{i + 1}" for i in range(7)])
+@pytest.mark.parametrize(
+    "i", range(len(LESSONS)), ids=[f"lesson{i + 1}" for i in range(len(LESSONS))]
+)
 def test_a_lesson_sets_params_view_and_shows_live_numbers(learn_page, i):
     tool, page, scene, cams = learn_page
     lesson = LESSONS[i]
@@ -70,7 +72,7 @@ def test_a_lesson_sets_params_view_and_shows_live_numbers(learn_page, i):
     def started():
         b = get(tool.base, "params")
         if (
-            b["methods"] == list(lesson.methods)
+            b["methods"] == list(lesson.robots())
             and b["walk"]["step_length"] == pytest.approx(lesson.walk["step_length"])
             and learn.lesson is lesson
         ):
@@ -89,7 +91,7 @@ def test_a_lesson_sets_params_view_and_shows_live_numbers(learn_page, i):
             assert params[group][name] == value, (lesson.title, group, name)
 
     # the view: the browser reports the lesson's named camera pose
-    n = len(lesson.methods)
+    n = len(lesson.robots())
     pos, _look, up, _fov = camera_pose(
         lesson.view, n, cams.client.camera.aspect, lesson.view == "side"
     )

@@ -205,7 +205,7 @@ class LearnTab:
         except PoolFull as exc:
             self.live.content = (
                 f"<b>Not started:</b> {html.escape(str(exc))}: this lesson needs "
-                f"{len(lesson.methods)} robots and the workers are full."
+                f"{len(lesson.robots())} robots and the workers are full."
             )
             return
         session.set_params(live_params().replace(**groups))
@@ -255,7 +255,7 @@ class LearnTab:
         if run is not self.run:  # a lesson started (here, or in another view of the session)
             self._adopt(run)
         lesson = run.lesson
-        if tuple(r.method for r in frame.robots) != lesson.methods:
+        if tuple(r.method for r in frame.robots) != lesson.robots():
             # the robots were changed by hand (or a new robot has not sent a frame yet)
             self._show(
                 now,

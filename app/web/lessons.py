@@ -8,12 +8,14 @@ here was measured on this model with ``pelvic-walk simulate`` (see the comments)
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 from app.live import FALL_HOLD_S
 from app.web.lesson_math import analysis_html, analysis_svg, equations
+from controller import strategy
 from controller.strategy import BUILTINS
 
 __all__ = [
@@ -86,13 +88,20 @@ class Lesson:
     # one sentence read from the parameters in force (e.g. whether the arms swing now), shown
     # above ``watch``: the text follows what the student changed
     now: Callable[[Any], str] | None = None
+    own: bool = False  # the server's own strategies (serve --strategy) walk beside ``methods``
+
+    def robots(self) -> tuple[str, ...]:
+        """The robots the lesson shows: its methods and, with ``own``, every strategy the
+        server loaded, in the registry's order."""
+        users = tuple(n for n in strategy.names() if not strategy.info(n).builtin)
+        return strategy.ordered(self.methods + users) if self.own else self.methods
 
     def setup(self) -> dict[str, Any]:
         """The preset form (as :data:`PRESETS`): parameter groups, methods, from defaults."""
         return {
             "walk": self.walk,
             **self.groups,
-            "methods": list(self.methods),
+            "methods": list(self.robots()),
             "reset_groups": True,
         }
 
@@ -220,7 +229,46 @@ LESSONS: tuple[Lesson, ...] = (
         ("18",),
         ("pushing", "lateral", "status", "falls"),
     ),
+    Lesson(
+        "8. Your own pelvis",
+        "eq. 27-40; the paper's question: how should the waist turn?",
+        {"step_length": 0.40, "step_time": 1.2},
+        ("fixed", "mpc"),
+        "follow",
+        "Write how the pelvis turns in one Python file: a subclass of <code>PelvisStrategy</code> "
+        "with a <code>name</code> and <code>waist_rate(self, s)</code>, which returns the waist "
+        "yaw rate [rad/s] the IK pins each 5 ms tick (or <code>None</code>: free to the IK). "
+        "<code>s</code> holds the waist now (<code>s.theta</code>), the paper's reference over "
+        "the horizon (<code>s.theta_ref</code>, eq. 27-33), the predicted CoM, the planned "
+        "feet and which foot swings (docs/STRATEGIES.md lists them; "
+        "<code>examples/my_pelvis.py</code> is a template). Start the server with "
+        "<code>pelvic-walk serve --strategy my_pelvis.py</code>: your robot walks here beside "
+        "the fixed pelvis and the MPC, in its own colour. Compare, at 0.40 m: does it turn "
+        "<b>before</b> the swing (the waist at lift-off), how far (waist range), how sharply "
+        "(peak change of the rate), what it costs in yaw momentum, and whether its badge stays "
+        "<i>clean</i>; then raise the step length until it is not. If your code raises or "
+        "returns no number, your robot stops with the file and line on its label; the others "
+        "walk on.",
+        ("30", "37", "39"),
+        ("status", "waist", "liftoff", "jerk", "yaw", "reach", "falls"),
+        now=lambda _p: own_strategies_sentence(),
+        own=True,
+    ),
 )
+
+
+def own_strategies_sentence() -> str:
+    """Lesson 8's first sentence: which strategies of the students' this server runs."""
+    users = [strategy.info(n) for n in strategy.names() if not strategy.info(n).builtin]
+    if not users:
+        return (
+            "This server runs <b>no strategy of yours</b> yet: only the paper's methods walk. "
+            "Stop it and start <code>pelvic-walk serve --strategy examples/track_reference.py"
+            "</code> (or your own file) to see one beside them."
+        )
+    names = ", ".join(f"<b>{i.label}</b> ({os.path.basename(i.file or '')})" for i in users)
+    return f"Running your strategies: {names}."
+
 
 # Short lessons, one per layer, with the paper's equation numbers.
 EXPLAIN: dict[str, str] = {

@@ -12,6 +12,7 @@ websocket address, so the display knows that browser drives the shared demo
 from __future__ import annotations
 
 import html
+import os
 from collections.abc import Callable
 from urllib.parse import quote
 
@@ -27,16 +28,35 @@ from app.web.api.edges import file_under, router
 from app.web.auth import TOKEN_PARAM, Instructor
 from app.web.overlays import MEASURED, PREDICTED, REFERENCE
 from app.web.report_page import render_report_page
+from controller import strategy
 
 DOCS_ASSETS = "/docs-assets"  # swagger-ui / redoc files of the fastapi-offline package
 
 
 COLOURS = {  # {{COLOR_<name>}} in the page: the scene's colours, from their one definition
-    **{m: info.color for m, info in METHOD_INFO.items()},
+    **{m: METHOD_INFO[m].color for m in strategy.BUILTINS},
     "predicted": PREDICTED,
     "reference": REFERENCE,
     "measured": MEASURED,
 }
+
+
+def own_robots_html() -> str:
+    """The page's list entries of the strategies this server loaded (``serve --strategy``)."""
+    items = []
+    for name in strategy.names():
+        i = strategy.info(name)
+        if i.builtin:
+            continue
+        file = os.path.basename(i.file or "")
+        items.append(
+            '<li><span class="swatch" style="background:rgb({},{},{})"></span>'.format(*i.color)
+            + f"<b>{html.escape(i.label)}</b> (a strategy of your own, "
+            f"<code>{html.escape(file)}</code>): {html.escape(i.description or name)}</li>"
+        )
+    return "\n      ".join(items)
+
+
 ROLES = {  # the line the page shows under its title, by role
     "": "",
     "instructor": "<p class='role'><b>Instructor</b>: you drive the shared demo; every "
@@ -87,6 +107,7 @@ def pages_router(
         page = page.replace("{{SCENE_LINK}}", html.escape(viser_url, quote=True))
         page = page.replace("{{VISER_URL}}", viser_url)
         page = page.replace("{{ROLE}}", ROLES[role])
+        page = page.replace("{{OWN_ROBOTS}}", own_robots_html())
         page = page.replace("{{FALL_HOLD_S}}", f"{FALL_HOLD_S:g}")
         for name, rgb in COLOURS.items():
             page = page.replace(f"{{{{COLOR_{name}}}}}", "rgb({},{},{})".format(*rgb))
