@@ -60,12 +60,13 @@ import numpy as np
 
 from app.runs import RunConfig, Session
 from app.sim.world import JOINTS, World
+from controller import strategy
 from controller.params import ControllerParams
 from controller.qp import INF, QP, QpSolver, frozen
 from controller.strategy import PelvisMpcStrategy
 
 STEP_LENGTH = 0.3  # [m]
-METHOD = "mpc"
+METHOD = strategy.MPC
 BACKENDS = ("daqp", "osqp")
 QP_LAYERS = ("ik", "arm_swing", "pelvis_mpc", "com_mpc")
 

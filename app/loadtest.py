@@ -42,11 +42,12 @@ from typing import TYPE_CHECKING, Any, cast
 import httpx
 
 from app.local_server import local_server, wait_healthy
+from controller.strategy import FIXED, MPC, REDUNDANCY
 
 if TYPE_CHECKING:
     from websockets.typing import Subprotocol
 
-METHOD_SETS = {1: ["mpc"], 2: ["fixed", "mpc"], 3: ["fixed", "redundancy", "mpc"]}
+METHOD_SETS = {1: [MPC], 2: [FIXED, MPC], 3: [FIXED, REDUNDANCY, MPC]}
 WARMUP_S = 5.0  # [s] after the viewers connect, before sampling
 MEMORY_WARMUP_SHARE = 0.2  # the server's memory is compared from this share of the run on
 VIEWER_NICE = 10  # nice steps of the viewers' thread (0: same priority as the server)
