@@ -65,7 +65,7 @@ class RobotFrame:
     falls: int
     last_walk_success: bool | None  # outcome of the last finished or failed walk
     waiting: bool  # restarted robot standing by to start in phase with the others
-    strategy_ms: float  # [ms] its strategy's waist_rate call lately (decaying peak)
+    strategy_ms: float  # [ms] its strategy's waist_rate call, median of the last second
     body_xpos: np.ndarray  # (nbody, 3) [m] MuJoCo body positions
     body_xmat: np.ndarray  # (nbody, 3, 3) body orientations
     hips: np.ndarray  # (2, 3) [m] left, right hip points (measured)

@@ -31,6 +31,7 @@ from models.dyros_jet import ROBOT_XML
 
 GRAVITY = 9.81  # [m/s^2]
 _sum = np.add.reduce  # ndarray.sum without its Python-level wrapper (the same reduction)
+STRATEGY_TICKS = 200  # the ticks (1 s) over which the live label reads the strategy's time
 _NAN_ROW = [math.nan] * len(COLUMNS)  # a series row before it is written (a column not
 # written, such as the CoP while airborne, stays NaN)
 
@@ -137,9 +138,10 @@ class Session:
         # stopped at error_time; only this robot stops
         self.error: str | None = None
         self.error_time: float | None = None
-        # [ms] the strategy's waist_rate call lately: a peak that decays (half-life 0.7 s), for
-        # the live label (a strategy slower than the tick cannot run in real time)
-        self.strategy_ms_recent = 0.0
+        # [ms] the strategy's waist_rate call at the last STRATEGY_TICKS ticks (a ring), for
+        # the live label: a strategy slower than the tick cannot run in real time. Their
+        # median, not a peak: on a busy machine any call may be preempted now and then
+        self._strategy_ms = np.full(STRATEGY_TICKS, np.nan)
         self.landings: dict[int, float] = {}  # step index -> landing error [m]
         self._landing_key: tuple[FootstepPlan, int, float] | None = None  # plan, step, time
         # step index -> cumulative energy per joint at its start: (200 Hz, substep) [J]
@@ -169,6 +171,12 @@ class Session:
         return self.walker.t
 
     @property
+    def strategy_ms_recent(self) -> float:
+        """[ms] the median time of the strategy's waist_rate over the last ticks (0 before)."""
+        kept = self._strategy_ms[np.isfinite(self._strategy_ms)]
+        return float(np.median(kept)) if len(kept) else 0.0
+
+    @property
     def done(self) -> bool:
         return self.fell or self.error is not None or self.walker.finished
 
@@ -192,7 +200,7 @@ class Session:
             self.error, self.error_time = str(exc), w.t
             raise
         t1 = clock()
-        self.strategy_ms_recent = max(out.strategy_s * 1e3, self.strategy_ms_recent * 0.995)
+        self._strategy_ms[self._ticks % STRATEGY_TICKS] = out.strategy_s * 1e3
         world.step(out.q_target)
         t2 = clock()
         self.last, self._measured, self._waist_meas = out, None, float(q_meas[0])

@@ -190,8 +190,8 @@ class RobotState(BaseModel):
         "strategy's code): this robot stopped, the others walk on"
     )
     strategy_ms: float = Field(
-        description="[ms] its strategy's waist_rate call lately (above the 5 ms control "
-        "period it cannot keep real time)"
+        description="[ms] its strategy's waist_rate call, the median over the last second "
+        "(above the 5 ms control period it cannot keep real time)"
     )
     fell_at: float | None = Field(
         description="session clock of the fall [s]: the robot lies where it fell until the "
