@@ -72,9 +72,17 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     p = sub.add_parser("serve", help="the web teaching tool (FastAPI + viser)")
-    p.add_argument("--host", default=None)
-    p.add_argument("--port", type=_port, default=None)
-    p.add_argument("--viser-port", type=_port, default=None)
+    p.add_argument(
+        "--host",
+        default=None,
+        help="the address to listen on (default 127.0.0.1: this machine only; 0.0.0.0: a class)",
+    )
+    p.add_argument(
+        "--port", type=_port, default=None, help="the page and the HTTP API (default 8000)"
+    )
+    p.add_argument(
+        "--viser-port", type=_port, default=None, help="the 3-D scene (viser; default 8080)"
+    )
     p.add_argument(
         "--report",
         "--report-dir",
@@ -167,7 +175,8 @@ def build_parser() -> argparse.ArgumentParser:
         dest="strategy_file",
         default=None,
         metavar="FILE.py[:Class]",
-        help="your own pelvis strategy instead of --method (docs/STRATEGIES.md)",
+        help="your own pelvis strategy instead of --method (docs/STRATEGIES.md); the exit "
+        "status is 1 if it raised or returned no rate (the message says where)",
     )
     add_param_options(p, required={"walk.step_length"})
     p.add_argument(
@@ -188,7 +197,12 @@ def build_parser() -> argparse.ArgumentParser:
         f"{DISTURBANCE_PERIOD:g} s (default with --seed: the study's {DISTURBANCE:g} N; 0: the "
         "start perturbation alone; needs --seed)",
     )
-    p.add_argument("--backend", choices=("osqp", "daqp"), default="daqp")
+    p.add_argument(
+        "--backend",
+        choices=("osqp", "daqp"),
+        default="daqp",
+        help="the QP solver of every layer (default daqp: exact active set; osqp: ADMM)",
+    )
     p.add_argument("--json", type=Path, default=None, help="write the summary here")
     p.add_argument("--csv", type=Path, default=None, help="write the time series here")
     p.add_argument(
@@ -340,10 +354,11 @@ def _simulate(args: argparse.Namespace) -> int:
         else "incomplete"
     )
     le = summary["landing_error_max"]
+    landing = f"{le * 100:.1f} cm" if le is not None else "-"
     print(
         f"{summary['method']} step {summary['step_length']:.3f} m x {summary['steps_planned']}: "
         f"{ok}, {summary['steps_completed']}/{summary['steps_planned']} steps, "
-        f"landing error max {le * 100 if le is not None else float('nan'):.1f} cm, "
+        f"landing error max {landing}, "
         f"ZMP in support {summary['zmp_in_support_ratio'] * 100:.1f} %, "
         f"waist max {summary['waist_yaw_max_deg']:.1f} deg, "
         f"kappa max {summary['condition_number_max']:.1f}, "
@@ -372,7 +387,8 @@ def _simulate(args: argparse.Namespace) -> int:
         session.series.to_csv(str(args.csv))
     if recorder is not None:
         _write_recording(recorder, args)
-    return 0
+    # a walk the strategy stopped did not run as asked: a script can tell (a fall is a result)
+    return 1 if summary["strategy_error"] else 0
 
 
 def _write_recording(recorder, args: argparse.Namespace) -> None:

@@ -278,9 +278,10 @@ def register(
             and all(isinstance(c, int) and 0 <= c <= 255 for c in color)
         ):
             raise ValueError(f"{where}: color must be three integers 0-255, got {color!r}")
-    else:
-        users = sum(1 for i in _REGISTRY.values() if not i.builtin and i.name != name)
-        color = PALETTE[users % len(PALETTE)]
+    else:  # the first colour of the palette no other strategy wears
+        taken = {i.color for i in _REGISTRY.values() if i.name != name}
+        free = [c for c in PALETTE if c not in taken]
+        color = free[0] if free else PALETTE[len(_REGISTRY) % len(PALETTE)]
     label = cls.label if isinstance(cls.label, str) and cls.label.strip() else name
     paper_label = cls.paper_label if isinstance(cls.paper_label, str) and cls.paper_label else label
     info = StrategyInfo(
@@ -497,7 +498,9 @@ def load_file(source: str) -> tuple[str, ...]:
 
 
 def _import(path: str, shown: str) -> Any:
-    """The module of the file at ``path``, under a name of its own (its errors: one line)."""
+    """The module of the file at ``path``, under a name of its own (its errors: one line).
+    Its folder joins ``sys.path`` (as for a script run from there), so the file may import a
+    module of its own that lies beside it."""
     digest = hashlib.sha1(path.encode()).hexdigest()[:12]
     name = f"pelvic_walk_user_{re.sub(r'[^0-9A-Za-z_]', '_', os.path.basename(path)[:-3])}_{digest}"
     spec = importlib.util.spec_from_file_location(name, path)
@@ -505,6 +508,9 @@ def _import(path: str, shown: str) -> Any:
         raise StrategyLoadError(f"{shown}: cannot be imported")
     module = importlib.util.module_from_spec(spec)
     sys.modules[name] = module  # dataclasses and pickling look classes up by their module
+    folder = os.path.dirname(path)
+    if folder not in sys.path:
+        sys.path.append(folder)  # after the tool's own: a student's file cannot shadow them
     try:
         spec.loader.exec_module(module)
     except SyntaxError as exc:

@@ -208,6 +208,15 @@ def test_a_faulty_strategy_stops_its_own_run_with_file_and_line(user_file, cls, 
     assert s["strategy_error_time"] is not None
 
 
+def test_simulate_says_a_stopped_walk_by_its_exit_status(user_file, capsys):
+    path = user_file(FAULTS, name="faults", file="faulty.py")
+    argv = ["simulate", "--strategy", f"{path}:Raises", "--step-length", "0.2", "--steps", "2"]
+    assert cli_main(argv) == 1  # the strategy stopped the walk: not the walk asked for
+    out = capsys.readouterr().out
+    assert "STOPPED by its strategy" in out and "landing error max -" in out
+    assert f"ZeroDivisionError: float division by zero (faulty.py:{_line(path, '1.0 / (')})" in out
+
+
 def test_a_slow_strategy_is_reported_with_its_time(user_file, tmp_path, capsys):
     path = user_file(FAULTS, name="faults", file="faulty.py")
     out = tmp_path / "slow.json"
@@ -337,3 +346,38 @@ def test_the_three_methods_are_strategies_on_the_same_contract():
     assert strategy.create("redundancy").waist_rate(inputs) is None
     rate = strategy.create("mpc").waist_rate(inputs)  # theta 0.1 toward theta_ref 0: turns back
     assert rate is not None and rate < 0.0
+
+
+def test_a_strategy_imports_a_module_beside_it_and_takes_a_free_colour(tmp_path):
+    (tmp_path / "helper_mod_for_test.py").write_text("def rate(s):\n    return 0.0\n")
+    (tmp_path / "two.py").write_text(
+        textwrap.dedent(
+            """
+            from helper_mod_for_test import rate
+            from pelvic_walk import PelvisStrategy
+
+            class Teal(PelvisStrategy):
+                name = "wears_teal"
+                color = (0, 160, 170)  # the palette's first colour, chosen by the student
+
+                def waist_rate(self, s):
+                    return rate(s)
+
+            class Plain(PelvisStrategy):
+                name = "wears_none"
+
+                def waist_rate(self, s):
+                    return rate(s)
+            """
+        )
+    )
+    names = strategy.load_file(str(tmp_path / "two.py"))
+    try:
+        assert set(names) == {"wears_teal", "wears_none"}
+        assert strategy.info("wears_none").color == strategy.PALETTE[1]  # teal is worn
+        s = summarize(run(RunConfig(ControllerParams().replace(method="wears_none",
+                                                              walk={"n_steps": 1}))))  # fmt: skip
+        assert s["success"]
+    finally:
+        for n in names:
+            strategy.unregister(n)

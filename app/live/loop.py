@@ -189,6 +189,7 @@ class LiveLoop:
         self._last_publish_clock = -math.inf  # and its session clock
         self._restarted = True
         self._dirty = True  # something to publish even if paused
+        self._errors_logged: set[str] = set()  # strategy errors already in the log
 
     # -- one iteration ---------------------------------------------------------------------
     def iterate(self) -> None:
@@ -370,8 +371,10 @@ class LiveLoop:
             return
         try:
             s.tick()
-        except StrategyError as exc:  # a user's mistake, not the server's: one line
-            log.warning("robot %s stopped: %s", robot.method, exc)
+        except StrategyError as exc:  # a user's mistake, not the server's: one line, once
+            if str(exc) not in self._errors_logged:
+                self._errors_logged.add(str(exc))
+                log.warning("robot %s stopped: %s", robot.method, exc)
             robot.error = str(exc)
             robot.last_walk_success = False
             self._hold(robot)  # this period's physics, the servos on the last targets

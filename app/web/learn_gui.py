@@ -46,6 +46,7 @@ STATUS_COLOURS = {
     "knee nearly straight": "#e8710a",
     "IK at the speed limit": "#e8710a",
     "fell": "#d93025",
+    "stopped": "#d93025",
 }
 COLUMNS = {  # row label of each live number (Lesson.numbers)
     "status": "status now",
@@ -59,6 +60,7 @@ COLUMNS = {  # row label of each live number (Lesson.numbers)
     "rate_now": "waist rate now",
     "jerk": "peak change of the waist rate (50 Hz)",
     "liftoff": "waist yaw at the last lift-off",
+    "dsp_turn": "share of the waist's travel made in the double support (two steps)",
     "yaw": "yaw momentum now (peak, two steps)",
     "arms": "arm swing",
     "settings": "k_pel, horizon in force",
@@ -90,8 +92,8 @@ class _Tally:
             return
         self.frames += 1
         self.status[r.status] = self.status.get(r.status, 0) + 1
-        if r.fell:
-            return  # lying on the floor: its legs' reach and kappa say nothing
+        if r.fell or r.error is not None:
+            return  # lying on the floor or stopped: its legs' reach and kappa say nothing
         if np.all(np.isfinite(r.reach)):
             self.reach_max = max(self.reach_max, float(np.max(r.reach)))
         if math.isfinite(r.kappa_legs):
@@ -331,8 +333,15 @@ class LearnTab:
             v = recent[:, COL[name]]
             return v[np.isfinite(v)]
 
-        if r.fell and key not in ("status", "falls", "step", "arms", "settings", "shares"):
-            return "-"  # lying on the floor: its measurements say nothing of the walk
+        if (r.fell or r.error is not None) and key not in (
+            "status",
+            "falls",
+            "step",
+            "arms",
+            "settings",
+            "shares",
+        ):
+            return "-"  # lying on the floor or stopped: its measurements say nothing of a walk
         if key == "status":
             if r.fell and r.fell_clock is not None:
                 return (
@@ -375,6 +384,8 @@ class LearnTab:
             return f"{np.max(np.abs(np.diff(v) / np.diff(t))[ok]):.0f}°/s²"
         if key == "liftoff":
             return self._liftoff(recent)
+        if key == "dsp_turn":
+            return self._dsp_turn(recent)
         if key == "yaw":
             h = col("yaw_momentum")
             peak_text = f"{np.abs(h).max():.2f}" if h.size else "-"
@@ -407,6 +418,19 @@ class LearnTab:
             dy = float(r.com[1] - np.mean(r.support[:, 1]))
             return f"{1000 * dy:+.0f} mm"
         raise KeyError(key)
+
+    @staticmethod
+    def _dsp_turn(rows: np.ndarray) -> str:
+        """How much of the waist's travel (the sum of |change| of its angle) fell in the double
+        support over the rows: the paper's "turns before the swing" as a number."""
+        dsp, waist = rows[:, COL["in_dsp"]], rows[:, COL["waist_deg"]]
+        ok = np.isfinite(waist[1:]) & np.isfinite(waist[:-1]) & np.isfinite(dsp[1:])
+        step = np.abs(np.diff(waist))[ok]
+        total = float(step.sum())
+        if total < 1.0:  # [deg] a pelvis that barely turns: no share to speak of
+            return "-"
+        in_dsp = float(step[dsp[1:][ok] == 1.0].sum())
+        return f"{100 * in_dsp / total:.0f} % ({in_dsp:.1f}° of {total:.0f}°)"
 
     @staticmethod
     def _liftoff(rows: np.ndarray) -> str:

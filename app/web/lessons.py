@@ -233,7 +233,7 @@ LESSONS: tuple[Lesson, ...] = (
         "8. Your own pelvis",
         "eq. 27-40; the paper's question: how should the waist turn?",
         {"step_length": 0.40, "step_time": 1.2},
-        ("fixed", "mpc"),
+        ("mpc",),
         "follow",
         "Write how the pelvis turns in one Python file: a subclass of <code>PelvisStrategy</code> "
         "with a <code>name</code> and <code>waist_rate(self, s)</code>, which returns the waist "
@@ -243,14 +243,16 @@ LESSONS: tuple[Lesson, ...] = (
         "feet and which foot swings (docs/STRATEGIES.md lists them; "
         "<code>examples/my_pelvis.py</code> is a template). Start the server with "
         "<code>pelvic-walk serve --strategy my_pelvis.py</code>: your robot walks here beside "
-        "the fixed pelvis and the MPC, in its own colour. Compare, at 0.40 m: does it turn "
-        "<b>before</b> the swing (the waist at lift-off), how far (waist range), how sharply "
-        "(peak change of the rate), what it costs in yaw momentum, and whether its badge stays "
-        "<i>clean</i>; then raise the step length until it is not. If your code raises or "
-        "returns no number, your robot stops with the file and line on its label; the others "
-        "walk on.",
+        "the MPC, in its own colour. Compare, at 0.40 m: how far it turns (waist range), how "
+        "much of that it turns <b>before</b> the swing (the share in the double support: the "
+        "paper's point), how sharply (peak change of the rate), what it costs in yaw momentum, "
+        "and whether its badge stays <i>clean</i>; then raise the <b>Step length</b> until it "
+        "is not. (Tick the fixed pelvis in <i>Compare</i> to see it too: past 0.42 m it falls, "
+        "and every fall restarts all robots.) If your code raises or returns no number, your "
+        "robot stops with the file and line on its label while the others walk on; <b>Restart "
+        "all robots together</b> runs it again.",
         ("30", "37", "39"),
-        ("status", "waist", "liftoff", "jerk", "yaw", "reach", "falls"),
+        ("status", "waist", "dsp_turn", "liftoff", "jerk", "yaw", "reach", "falls"),
         now=lambda _p: own_strategies_sentence(),
         own=True,
     ),
@@ -356,7 +358,7 @@ def warnings_for(params: Any, methods: tuple[str, ...] = BUILTINS) -> list[str]:
     if beyond:
         limits = ", ".join(f"{names[m]} {CLEAN_LIMIT_M[m]:.2f} m" for m in shown)
         out.append(
-            f"{w.step_length:.2f} m is beyond the longest clean step measured here for "
+            f"{w.step_length:.2f} m is beyond the longest clean step measured on this robot for "
             f"{', '.join(names[m] for m in beyond)} ({limits} at 1.2 s steps): watch the "
             "status badges."
         )

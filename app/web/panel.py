@@ -451,7 +451,7 @@ class ControlPanel:
             if r.error is not None:
                 lines.append(
                     f"**{METHOD_INFO[r.method].title}**: ⚠ stopped: `{r.error}`; it restarts "
-                    "with the others (or press Reset)"
+                    "with the others (or press *Restart all robots together*)"
                 )
                 continue
             if r.fell:

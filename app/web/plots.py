@@ -263,7 +263,7 @@ class HorizonInspector:
             series=(
                 x_axis,
                 # the reference drawn last, its dashes over the MPC's line where they coincide
-                viser.uplot.Series(label="theta (MPC, eq. 35)", stroke=pred, width=3),
+                viser.uplot.Series(label="theta (planned: the MPC, eq. 35)", stroke=pred, width=3),
                 viser.uplot.Series(label="theta_ref (eq. 33)", stroke=ref, width=2, dash=(8, 5)),
             ),
             aspect=2.0,
@@ -346,9 +346,15 @@ class HorizonInspector:
             if r.in_dsp
             else ("single support" if r.step_index >= 0 else "standing")
         )
+        stopped = (
+            f" ⚠ stopped by its strategy's error at t = {r.t:.2f} s of its walk: the plan shown "
+            "is its last."
+            if r.error is not None
+            else ""
+        )
         self.caption.content = (
             f"**{METHOD_INFO[r.method].title}** at t = {frame.clock:.2f} s ({phase}, step "
-            f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples."
+            f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples.{stopped}"
         )
 
 

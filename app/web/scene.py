@@ -397,12 +397,15 @@ STAGGER_STEP = 0.5  # [m] the cameras are fitted again when the robots' stagger 
 
 
 def robot_xs(robots: tuple[RobotFrame, ...]) -> list[float]:
-    """[m] each robot's forward position: a walking robot's CoM, a fallen one's middle."""
+    """[m] the forward positions the view follows: a walking robot's CoM, a fallen one's
+    middle (it lies there for a few seconds). A robot its strategy stopped stands until the
+    next restart, which may be minutes away: the view leaves it behind (unless all stopped)."""
+    going = [r for r in robots if r.error is None] or list(robots)
     return [
         (float(r.body_xpos[1:, 0].min()) + float(r.body_xpos[1:, 0].max())) / 2
         if r.fell
         else float(r.com[0])
-        for r in robots
+        for r in going
     ]
 
 
@@ -458,7 +461,7 @@ def label_text(r: RobotFrame, frame: LiveFrame) -> str:
     and when the session restarts every robot."""
     head = METHOD_INFO[r.method].title
     if r.error is not None:
-        return f"⚠ {head} STOPPED\n{wrap(r.error)}\nrestarts with the others (or Reset)"
+        return f"⚠ {head} STOPPED\n{wrap(r.error)}\nRestart all robots together runs it again"
     if r.fell:
         when, why, restart = fall_note(r, frame)
         return f"⚠ {head} FELL {when}\n{why}\n{restart}"
