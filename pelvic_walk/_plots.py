@@ -6,18 +6,18 @@ once, as the cell's value, and nothing is left open in pyplot's list of figures.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from app.methods import method_hex
 from app.sim.metrics import KAPPA_SINGULAR
+from controller.params import GROUPS, ControllerParams
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
-
-    from pelvic_walk._run import Run
 
 DEG = 180.0 / np.pi
 # name -> (series column, scale, title with unit, log axis)
@@ -42,19 +42,20 @@ def _dsp_spans(t: np.ndarray, step: np.ndarray, in_ssp: np.ndarray) -> list[tupl
     dsp = (step >= 0) & (in_ssp == 0)
     on = np.concatenate([[False], dsp, [False]])
     edges = np.flatnonzero(np.diff(on.astype(int)))
-    return [(float(t[a]), float(t[min(b, len(t) - 1)])) for a, b in zip(edges[::2], edges[1::2])]
+    return [
+        (float(t[a]), float(t[min(b, len(t) - 1)]))
+        for a, b in zip(edges[::2], edges[1::2], strict=True)
+    ]
 
 
-def plot(runs: Sequence[Run], *panels: str) -> Figure:
+def plot(runs: Sequence[Any], *panels: str) -> Figure:
     """Stacked panels against time [s], a line per run (a method's runs in its colour, told
     apart by the line style); grey: double support of the first run. ``panels``: names of
     :data:`PANELS` (default: waist, waist_rate, yaw_momentum, kappa, energy)."""
     from matplotlib.figure import Figure
 
-    from pelvic_walk._run import Run, labels
-
     runs = list(runs)
-    if not runs or not all(isinstance(r, Run) for r in runs):
+    if not runs or not all(hasattr(r, "column") and hasattr(r, "params") for r in runs):
         raise ValueError("plot() takes runs made by pelvic_walk.simulate")
     chosen = panels or DEFAULT_PANELS
     for p in chosen:
@@ -92,3 +93,39 @@ def plot(runs: Sequence[Run], *panels: str) -> Figure:
     axes[0].legend(loc="upper right", fontsize=8, ncol=min(len(runs), 4))
     axes[-1].set_xlabel("time since the start [s] (grey: double support)")
     return fig
+
+
+def differing_params(runs: Sequence[Any]) -> list[str]:
+    """Dotted names of the parameters (and ``seed``) that differ between the runs."""
+    names: list[str] = []
+    for group in GROUPS:
+        for f in dataclasses.fields(getattr(ControllerParams(), group)):
+            values = {repr(getattr(getattr(r.params, group), f.name)) for r in runs}
+            if len(values) > 1:
+                names.append(f"{group}.{f.name}")
+    if len({r.seed for r in runs}) > 1:
+        names.append("seed")
+    return names
+
+
+def param_value(run: Any, dotted: str) -> Any:
+    if dotted == "seed":
+        return run.seed
+    group, _, name = dotted.partition(".")
+    return getattr(getattr(run.params, group), name)
+
+
+def labels(runs: Sequence[Any]) -> list[str]:
+    """A name per run: its method, with the parameters that tell it from the others'."""
+    differing = differing_params(runs)
+    out = []
+    for r in runs:
+        same = [o for o in runs if o.method == r.method]
+        extra = [f"{d.partition('.')[2] or d}={param_value(r, d)}" for d in differing]
+        out.append(f"{r.method} ({', '.join(extra)})" if extra and len(same) > 1 else r.method)
+    seen: dict[str, int] = {}
+    unique = []
+    for label in out:
+        seen[label] = seen.get(label, 0) + 1
+        unique.append(label if seen[label] == 1 else f"{label} #{seen[label]}")
+    return unique

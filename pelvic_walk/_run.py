@@ -17,8 +17,9 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from app.sim.metrics import COLUMN_UNITS, COLUMNS, with_unit
-from controller.params import GROUPS, ControllerParams
+from controller.params import ControllerParams
 from pelvic_walk import _params
+from pelvic_walk._plots import differing_params, labels, param_value
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -139,7 +140,9 @@ class Run:
             raise ValueError("the run recorded no horizon (it stopped before its first tick)")
         times = np.array([f.robots[0].t for f in frames])
         if t < times[0] - 0.05 or t > times[-1] + 0.05:
-            raise ValueError(f"t = {t:g} s is outside the run ({times[0]:.2f} to {times[-1]:.2f} s)")
+            raise ValueError(
+                f"t = {t:g} s is outside the run ({times[0]:.2f} to {times[-1]:.2f} s)"
+            )
         robot = frames[int(np.argmin(np.abs(times - t)))].robots[0]
         h = robot.horizon
         assert h is not None
@@ -208,7 +211,7 @@ class Run:
             from IPython import get_ipython
             from IPython.display import display
         except ImportError:
-            get_ipython = None  # type: ignore[assignment]
+            get_ipython = None
         if get_ipython is None or get_ipython() is None:
             raise RuntimeError(
                 "show() plays the scene in a notebook; here use run.player().save('walk.html') "
@@ -326,42 +329,6 @@ def simulate(
     return Run(cfg.params, seed, summary, columns, recorder.frames, recorder)
 
 
-def _differing(runs: Sequence[Run]) -> list[str]:
-    """Dotted names of the parameters (and ``seed``) that differ between the runs."""
-    names: list[str] = []
-    for group in GROUPS:
-        for f in dataclasses.fields(getattr(ControllerParams(), group)):
-            values = {repr(getattr(getattr(r.params, group), f.name)) for r in runs}
-            if len(values) > 1:
-                names.append(f"{group}.{f.name}")
-    if len({r.seed for r in runs}) > 1:
-        names.append("seed")
-    return names
-
-
-def _value(run: Run, dotted: str) -> Any:
-    if dotted == "seed":
-        return run.seed
-    group, _, name = dotted.partition(".")
-    return getattr(getattr(run.params, group), name)
-
-
-def labels(runs: Sequence[Run]) -> list[str]:
-    """A name per run: its method, with the parameters that tell it from the others'."""
-    differing = _differing(runs)
-    out = []
-    for r in runs:
-        same = [o for o in runs if o.method == r.method]
-        extra = [f"{d.partition('.')[2] or d}={_value(r, d)}" for d in differing]
-        out.append(f"{r.method} ({', '.join(extra)})" if extra and len(same) > 1 else r.method)
-    seen: dict[str, int] = {}
-    unique = []
-    for label in out:
-        seen[label] = seen.get(label, 0) + 1
-        unique.append(label if seen[label] == 1 else f"{label} #{seen[label]}")
-    return unique
-
-
 def compare(runs: Iterable[Run], keys: Sequence[str] | None = None) -> pd.DataFrame:
     """One table, a row per run: the parameters that differ between the runs, then the
     summary keys that compare walks (``keys`` to choose others: any of ``run.summary``).
@@ -376,11 +343,11 @@ def compare(runs: Iterable[Run], keys: Sequence[str] | None = None) -> pd.DataFr
         raise ValueError(
             f"unknown summary key {unknown[0]!r} (one of: {', '.join(runs[0].summary)})"
         )
-    differing = _differing(runs)
+    differing = differing_params(runs)
     rows = []
     for r in runs:
         row: dict[str, Any] = {"method": r.method, "step_length": r.params.walk.step_length}
-        row |= {d: _value(r, d) for d in differing if d != "walk.step_length"}
+        row |= {d: param_value(r, d) for d in differing if d != "walk.step_length"}
         row |= {k: r.summary[k] for k in keys}
         rows.append(row)
     return pd.DataFrame(rows, index=pd.Index(labels(runs), name="run"))
