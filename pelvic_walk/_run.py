@@ -32,6 +32,7 @@ if TYPE_CHECKING:
 COMPARE_KEYS = (
     "success",
     "clean",
+    "fell",
     "steps_completed",
     "landing_error_max",
     "waist_yaw_max_deg",
