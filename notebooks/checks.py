@@ -108,9 +108,9 @@ def horizon_samples(answer: Any, run: pw.Run) -> bool | None:
     return _number(
         answer,
         round(p.horizon / p.sample_time),
-        0.0,
+        1e-6,
         "N, the samples of the horizon",
-        "N = H / T_p: run.params.com.horizon and run.params.com.sample_time",
+        "N = H / T_p: run.params.com.horizon / run.params.com.sample_time, and the table's rows",
     )
 
 

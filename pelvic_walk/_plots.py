@@ -92,7 +92,28 @@ def plot(runs: Sequence[Any], *panels: str) -> Figure:
         ax.grid(alpha=0.3)
     axes[0].legend(loc="upper right", fontsize=8, ncol=min(len(runs), 4))
     axes[-1].set_xlabel("time since the start [s] (grey: double support)")
+    _show_figures_in_notebook()
     return fig
+
+
+def _show_figures_in_notebook() -> None:
+    """In a notebook, make a Figure show as a picture when it is a cell's value. IPython does
+    so once pyplot is imported; a notebook that never imports it would print
+    ``<Figure size ...>``."""
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        return
+    shell = get_ipython()
+    if shell is None:
+        return
+    from matplotlib.figure import Figure
+
+    png = shell.display_formatter.formatters["image/png"]
+    if Figure not in png.type_printers:
+        from IPython.core.pylabtools import select_figure_formats
+
+        select_figure_formats(shell, {"png"}, bbox_inches="tight")
 
 
 def differing_params(runs: Sequence[Any]) -> list[str]:

@@ -148,8 +148,9 @@ class Run:
         h = robot.horizon
         assert h is not None
         values = {
-            "t": robot.t + h.t,
-            "ahead": h.t,
+            # on the MPC's sample grid: rounded to the microsecond, so == 1.0 finds a sample
+            "t": np.round(robot.t + h.t, 6),
+            "ahead": np.round(h.t, 6),
             "com_x": h.com[:, 0],
             "com_y": h.com[:, 1],
             "zmp_x": h.zmp[:, 0],
@@ -168,7 +169,7 @@ class Run:
             "theta": h.theta,
         }
         df = pd.DataFrame({with_unit(c, u): np.asarray(values[c]) for c, u in HORIZON_COLUMNS})
-        df.attrs["t"] = robot.t
+        df.attrs["t"] = round(robot.t, 6)
         return df
 
     @property
@@ -199,7 +200,9 @@ class Run:
             from app.web import recording
 
             rec = self._recorder.recording(f"pelvic_walk.simulate: {self.command}")
-            self._player = Player(recording.scene_html(rec), rec.duration, self.label)
+            with _quiet():  # the scene's viser server announces itself (rich, in a notebook)
+                page = recording.scene_html(rec)
+            self._player = Player(page, rec.duration, self.label)
         return self._player
 
     def show(self, height: int = 480) -> None:
@@ -208,16 +211,13 @@ class Run:
         ``Player.save("walk.html")``, then open the file in a browser."""
         player = self.player()
         player.height = height
-        try:
-            from IPython import get_ipython
-            from IPython.display import display
-        except ImportError:
-            get_ipython = None
-        if get_ipython is None or get_ipython() is None:
+        if _ipython() is None:
             raise RuntimeError(
                 "show() plays the scene in a notebook; here use run.player().save('walk.html') "
                 "and open the file in a browser"
             )
+        from IPython.display import display
+
         display(player)
 
     def __repr__(self) -> str:
@@ -241,6 +241,26 @@ class Run:
             f"{s['waist_yaw_max_deg']:.1f} deg, yaw momentum peak {s['yaw_momentum_peak']:.2f} "
             f"kg m^2/s, kappa(legs) max {s['condition_number_legs_max']:.0f}>"
         )
+
+
+def _ipython() -> Any:
+    """The running IPython shell (a notebook's kernel), or None."""
+    try:
+        from IPython import get_ipython
+    except ImportError:
+        return None
+    return get_ipython()
+
+
+def _quiet() -> Any:
+    """A context that keeps prints and displays out of a notebook's output (a no-op outside)."""
+    import contextlib
+
+    if _ipython() is None:
+        return contextlib.nullcontext()
+    from IPython.utils.capture import capture_output
+
+    return capture_output(display=True)
 
 
 class Player:
@@ -327,6 +347,8 @@ def simulate(
     session = run(cfg, on_tick=recorder.capture)
     summary = summarize(session)
     columns = {c: session.series.column(c) for c in COLUMNS}
+    # on the 5 ms grid to the microsecond (a sum of periods drifts by 1e-15): == 2.0 finds a tick
+    columns["t"] = np.round(columns["t"], 6)
     return Run(cfg.params, seed, summary, columns, recorder.frames, recorder)
 
 
