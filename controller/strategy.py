@@ -278,9 +278,7 @@ def register(
         same_file = (
             old.source is not None and source is not None and old.file == source.rpartition(":")[0]
         )
-        in_process_again = (
-            not builtin and source is None and not old.builtin and old.source is None
-        )
+        in_process_again = not builtin and source is None and not old.builtin and old.source is None
         if not ((replace and same_file) or in_process_again):
             taken = (
                 "a built-in strategy"
