@@ -1,8 +1,9 @@
 """Checks for the course's exercises: run one after your answer.
 
-Each check prints one line and returns True (right), False (not yet: with a hint) or None
-(not answered: the answer is still ``...``). A check never stops the notebook, so the lesson
-runs top to bottom before you have answered anything. The right answers are computed here
+Each check prints one line: ✓ (right), ✗ (not yet, with a hint) or … (not answered: the answer
+is still ``...``); its value's ``ok`` is True, False or None (the notebook shows nothing more).
+A check never stops the notebook, so the lesson runs top to bottom before you have answered
+anything. The right answers are computed here
 from the tool itself (``pelvic_walk``) or from the runs you pass in, never typed in.
 """
 
@@ -16,6 +17,23 @@ import numpy as np
 import pelvic_walk as pw
 
 OK, NOT_YET, OPEN = "\u2713", "\u2717", "\u2026"
+
+
+class Verdict:
+    """A check's outcome: ``ok`` is True, False or None (not answered). A notebook shows
+    nothing for it: the check has printed its line."""
+
+    def __init__(self, ok: bool | None):
+        self.ok = ok
+
+    def __bool__(self) -> bool:
+        return bool(self.ok)
+
+    def __repr__(self) -> str:
+        return f"Verdict({self.ok})"
+
+    def _ipython_display_(self) -> None:
+        pass
 
 
 def _unanswered(answer: Any, what: str) -> bool:
@@ -53,7 +71,18 @@ def _choice(answer: Any, right: str, choices: tuple[str, ...], what: str, why: s
     return False
 
 
+def _verdict(check: Any) -> Any:
+    """A check returning True / False / None -> one returning a :class:`Verdict`."""
+
+    def run(*args: Any, **kwargs: Any) -> Verdict:
+        return Verdict(check(*args, **kwargs))
+
+    run.__name__, run.__doc__ = check.__name__, check.__doc__
+    return run
+
+
 # -- 1 why turning the pelvis lengthens the step ---------------------------------------------
+@_verdict
 def eq4(answer: Any) -> bool | None:
     """Eq. (4) with the paper's numbers [m]."""
     right = pw.analyze()["step_max_fixed_static"]
@@ -66,6 +95,7 @@ def eq4(answer: Any) -> bool | None:
     )
 
 
+@_verdict
 def best_angle(answer: Any) -> bool | None:
     """The pelvic angle [deg] at which l_pel sin(theta) cos(theta) is largest."""
     return _number(
@@ -77,6 +107,7 @@ def best_angle(answer: Any) -> bool | None:
     )
 
 
+@_verdict
 def our_increase(answer: Any) -> bool | None:
     """Eq. (5) over eq. (4) for our robot at 45 deg [%]."""
     right = pw.analyze(**pw.robot())["increase_percent"]
@@ -89,6 +120,7 @@ def our_increase(answer: Any) -> bool | None:
     )
 
 
+@_verdict
 def static_gain_at(answer: Any, run: pw.Run) -> bool | None:
     """Eq. (5)'s static step [m] at the waist angle ``run`` reached."""
     theta = run.summary["waist_yaw_max_deg"]
@@ -103,6 +135,7 @@ def static_gain_at(answer: Any, run: pw.Run) -> bool | None:
 
 
 # -- 2 the CoM MPC and its prediction --------------------------------------------------------
+@_verdict
 def horizon_samples(answer: Any, run: pw.Run) -> bool | None:
     p = run.params.com
     return _number(
@@ -114,6 +147,7 @@ def horizon_samples(answer: Any, run: pw.Run) -> bool | None:
     )
 
 
+@_verdict
 def zmp_inside(answer: Any, plan: Any) -> bool | None:
     """Whether every predicted ZMP sample of ``plan`` (a ``run.horizon(t)`` table) is inside
     its bounds."""
@@ -134,6 +168,7 @@ def zmp_inside(answer: Any, plan: Any) -> bool | None:
     return False
 
 
+@_verdict
 def prediction_error(answer: Any, run: pw.Run, plan: Any, ahead: float) -> bool | None:
     """|predicted - measured| CoM y [cm] ``ahead`` seconds after the plan's instant."""
     rows = plan[np.isclose(plan["ahead [s]"], ahead)]
@@ -152,6 +187,7 @@ def prediction_error(answer: Any, run: pw.Run, plan: Any, ahead: float) -> bool 
     )
 
 
+@_verdict
 def shortest_walking_horizon(answer: Any, runs: dict[float, pw.Run]) -> bool | None:
     """The shortest horizon H [s] of ``runs`` (H -> run) whose walk succeeded."""
     walked = [h for h, r in runs.items() if r.summary["success"]]
@@ -168,6 +204,7 @@ def shortest_walking_horizon(answer: Any, runs: dict[float, pw.Run]) -> bool | N
 
 
 # -- 3 the pelvic reference and MPC ----------------------------------------------------------
+@_verdict
 def more_turn(answer: Any, low: pw.Run, high: pw.Run) -> bool | None:
     right = (
         "high" if high.summary["waist_yaw_max_deg"] > low.summary["waist_yaw_max_deg"] else "low"
@@ -181,6 +218,7 @@ def more_turn(answer: Any, low: pw.Run, high: pw.Run) -> bool | None:
     )
 
 
+@_verdict
 def tracking_error(answer: Any, run: pw.Run) -> bool | None:
     """RMS of (commanded waist angle - theta_ref) while walking [deg]."""
     walking = run.column("step_index") >= 0
@@ -196,6 +234,7 @@ def tracking_error(answer: Any, run: pw.Run) -> bool | None:
     )
 
 
+@_verdict
 def angle_at_touchdown(answer: Any, run: pw.Run) -> bool | None:
     """|waist angle| [deg] at the first touch-down (the last tick of the first step's single
     support)."""
@@ -214,6 +253,7 @@ def angle_at_touchdown(answer: Any, run: pw.Run) -> bool | None:
 
 
 # -- 4 the three methods compared ------------------------------------------------------------
+@_verdict
 def method_with(answer: Any, runs: list[pw.Run], key: str, largest: bool = True) -> bool | None:
     values = {r.method: r.summary[key] for r in runs}
     pick = max if largest else min
@@ -227,6 +267,7 @@ def method_with(answer: Any, runs: list[pw.Run], key: str, largest: bool = True)
     )
 
 
+@_verdict
 def clean_at_long_step(answer: Any, runs: list[pw.Run]) -> bool | None:
     """The set of methods whose walk was clean."""
     right = {r.method for r in runs if r.summary["clean"]}
@@ -240,6 +281,7 @@ def clean_at_long_step(answer: Any, runs: list[pw.Run]) -> bool | None:
     return False
 
 
+@_verdict
 def arms_share(answer: Any, with_arms: pw.Run, without: pw.Run) -> bool | None:
     """How much of the yaw momentum peak the arm swing removes [%]."""
     a, b = with_arms.summary["yaw_momentum_peak"], without.summary["yaw_momentum_peak"]
@@ -254,6 +296,7 @@ def arms_share(answer: Any, with_arms: pw.Run, without: pw.Run) -> bool | None:
 
 
 # -- 5 your own pelvis -----------------------------------------------------------------------
+@_verdict
 def clean_beside_mpc(mine: pw.Run, mpc: pw.Run) -> bool:
     """Your strategy walks cleanly where the MPC does (the same length and steps)."""
     s, m = mine.summary, mpc.summary
@@ -279,6 +322,7 @@ def clean_beside_mpc(mine: pw.Run, mpc: pw.Run) -> bool:
     return True
 
 
+@_verdict
 def stopped_at(answer: Any, run: pw.Run) -> bool | None:
     """The time [s] the faulty strategy's walk stopped."""
     right = run.summary["strategy_error_time"]

@@ -82,16 +82,16 @@ def test_checks_of_numbers_accept_the_right_answer_only(capsys):
     import pelvic_walk as pw
 
     checks = _checks()
-    assert checks.eq4(...) is None
-    assert checks.eq4(math.sqrt(0.75**2 - 0.68**2)) is True
-    assert checks.eq4(0.31 + 0.01) is False
-    assert checks.eq4("a lot") is False
-    assert checks.best_angle(45) is True and checks.best_angle(90) is False
+    assert checks.eq4(...).ok is None
+    assert checks.eq4(math.sqrt(0.75**2 - 0.68**2)).ok is True
+    assert checks.eq4(0.31 + 0.01).ok is False
+    assert checks.eq4("a lot").ok is False
+    assert checks.best_angle(45).ok is True and checks.best_angle(90).ok is False
     ours = pw.robot()
     fixed = math.sqrt(ours["l_leg"] ** 2 - ours["z0"] ** 2)
     right = 100 * ours["l_pel"] * 0.5 / fixed  # sin 45 cos 45 = 1/2
-    assert checks.our_increase(right) is True
-    assert checks.our_increase(35.0) is False
+    assert checks.our_increase(right).ok is True
+    assert checks.our_increase(35.0).ok is False
     out = capsys.readouterr().out
     assert "not answered yet" in out and "✓" in out and "✗" in out and "Hint" in out
 
@@ -104,40 +104,41 @@ def test_checks_of_runs_read_the_runs(capsys):
     fixed = pw.simulate("fixed", step_length=0.3, steps=2)
     s = walk.series
     plan = walk.horizon(2.0)
-    assert checks.horizon_samples(16, walk) is True and checks.horizon_samples(15, walk) is False
-    assert checks.zmp_inside(True, plan) is True and checks.zmp_inside(False, plan) is False
+    assert checks.horizon_samples(16, walk).ok is True
+    assert checks.horizon_samples(15, walk).ok is False
+    assert checks.zmp_inside(True, plan).ok is True and checks.zmp_inside(False, plan).ok is False
     moved = plan.copy()
     moved["zmp_y [m]"] = moved["zmp_max_y [m]"] + 0.1  # a plan outside its bounds
-    assert checks.zmp_inside(False, moved) is True
+    assert checks.zmp_inside(False, moved).ok is True
 
     row = plan[np.isclose(plan["ahead [s]"], 1.0)].iloc[0]
     measured = np.interp(row["t [s]"], s["t [s]"], s["com_y [m]"])
     error_cm = abs(row["com_y [m]"] - measured) * 100
-    assert checks.prediction_error(error_cm, walk, plan, 1.0) is True
-    assert checks.prediction_error(error_cm + 1, walk, plan, 1.0) is False
+    assert checks.prediction_error(error_cm, walk, plan, 1.0).ok is True
+    assert checks.prediction_error(error_cm + 1, walk, plan, 1.0).ok is False
 
     walking = s["step_index"] >= 0
     d = (s["waist_angle_cmd [rad]"] - s["theta_ref [rad]"])[walking]
-    assert checks.tracking_error(np.degrees(np.sqrt(np.nanmean(d**2))), walk) is True
-    assert checks.tracking_error(0.0, walk) is False
+    assert checks.tracking_error(np.degrees(np.sqrt(np.nanmean(d**2))), walk).ok is True
+    assert checks.tracking_error(0.0, walk).ok is False
 
     ssp = np.flatnonzero((s["step_index"].to_numpy() == 0) & (s["in_ssp"].to_numpy() == 1))
     at_touchdown = abs(np.degrees(s["waist_angle [rad]"].iloc[ssp[-1]]))
-    assert checks.angle_at_touchdown(at_touchdown, walk) is True
-    assert checks.angle_at_touchdown(at_touchdown + 1.0, walk) is False
+    assert checks.angle_at_touchdown(at_touchdown, walk).ok is True
+    assert checks.angle_at_touchdown(at_touchdown + 1.0, walk).ok is False
 
-    assert checks.more_turn("high", fixed, walk) is True  # walk turns, fixed does not
-    assert checks.more_turn("low", fixed, walk) is False
-    assert checks.method_with("mpc", [fixed, walk], "waist_yaw_max_deg") is True
-    assert checks.method_with("fixed", [fixed, walk], "waist_yaw_max_deg") is False
-    assert checks.method_with("nope", [fixed, walk], "waist_yaw_max_deg") is False
-    assert checks.clean_at_long_step({"fixed", "mpc"}, [fixed, walk]) is True
-    assert checks.clean_at_long_step({"mpc"}, [fixed, walk]) is False
+    assert checks.more_turn("high", fixed, walk).ok is True  # walk turns, fixed does not
+    assert checks.more_turn("low", fixed, walk).ok is False
+    assert checks.method_with("mpc", [fixed, walk], "waist_yaw_max_deg").ok is True
+    assert checks.method_with("fixed", [fixed, walk], "waist_yaw_max_deg").ok is False
+    assert checks.method_with("nope", [fixed, walk], "waist_yaw_max_deg").ok is False
+    assert checks.clean_at_long_step({"fixed", "mpc"}, [fixed, walk]).ok is True
+    assert checks.clean_at_long_step({"mpc"}, [fixed, walk]).ok is False
     a, b = walk.summary["yaw_momentum_peak"], fixed.summary["yaw_momentum_peak"]
-    assert checks.arms_share(100 * (1 - a / b), walk, fixed) is True
-    assert checks.clean_beside_mpc(fixed, walk) is True
-    assert checks.shortest_walking_horizon(1.6, {1.6: walk}) is True
-    assert checks.stopped_at(1.0, walk) is False  # nothing stopped it
+    assert checks.arms_share(100 * (1 - a / b), walk, fixed).ok is True
+    assert checks.clean_beside_mpc(fixed, walk).ok is True
+    assert checks.shortest_walking_horizon(1.6, {1.6: walk}).ok is True
+    assert checks.stopped_at(1.0, walk).ok is False  # nothing stopped it
     capsys.readouterr()
 
 
@@ -158,6 +159,6 @@ def test_checks_of_a_stopped_strategy():
     finally:
         strategy.unregister("nb_stops")
     assert run.summary["strategy_error"] and run.summary["strategy_error_time"] > 1.0
-    assert checks.stopped_at(run.column("t")[-1], run) is True
-    assert checks.stopped_at(0.5, run) is False
-    assert checks.clean_beside_mpc(run, run) is False
+    assert checks.stopped_at(run.column("t")[-1], run).ok is True
+    assert checks.stopped_at(0.5, run).ok is False
+    assert checks.clean_beside_mpc(run, run).ok is False
