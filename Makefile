@@ -63,15 +63,16 @@ lint: $(TEST_STAMP)
 	$(BIN)/lint-imports
 
 # The course (notebooks/, docs/PYTHON.md): the notebook extra (JupyterLab, its kernel, pandas)
-# in .venv, then JupyterLab on notebooks/ (Ctrl-C stops it). The notebooks are stored without
-# outputs; tests/test_notebooks.py runs each one top to bottom in `make test`.
+# in .venv, then JupyterLab on notebooks/ (Ctrl-C stops it; as root, as on CI machines, it needs
+# --allow-root). The notebooks are stored without outputs; tests/test_notebooks.py runs each
+# one top to bottom in `make test`.
 NB_STAMP := $(VENV)/.installed-notebook
 $(NB_STAMP): $(STAMP)
 	$(BIN)/pip install -q -e '.[notebook]'
 	@touch $@
 
 notebook: $(NB_STAMP) $(KERNELS)
-	$(BIN)/jupyter lab --notebook-dir=notebooks
+	$(BIN)/jupyter lab --notebook-dir=notebooks $$([ "$$(id -u)" = 0 ] && echo --allow-root)
 
 # A peer for `pelvic-walk bench`: placo in a venv of its own (it pins an older Pinocchio than
 # ours, so it cannot share .venv); the bench finds it there and runs placo's walk loop on our
