@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test check lint clean chromium peers
+.PHONY: run test check lint clean chromium peers notebook
 
 $(BIN)/python:
 	@$(PY) -c 'import sys; assert sys.version_info[:2] == (3, 11)' 2>/dev/null \
@@ -53,13 +53,26 @@ test: $(TEST_STAMP) $(KERNELS) chromium
 check: $(TEST_STAMP) $(KERNELS)
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not browser and not slow"
 
-# Style, types and structure: ruff's rules and formatting everywhere, mypy on app and
-# controller, the import contracts between the layers (pyproject.toml [tool.importlinter]).
+# Style, types and structure: ruff's rules and formatting everywhere (the notebooks' code
+# cells too), mypy on app, controller and pelvic_walk, the import contracts between the
+# layers (pyproject.toml [tool.importlinter]).
 lint: $(TEST_STAMP)
-	$(BIN)/ruff check app controller models tests
-	$(BIN)/ruff format --check app controller models tests
+	$(BIN)/ruff check app controller models tests pelvic_walk notebooks examples
+	$(BIN)/ruff format --check app controller models tests pelvic_walk notebooks examples
 	$(BIN)/mypy
 	$(BIN)/lint-imports
+
+# The course (notebooks/, docs/PYTHON.md): the notebook extra (JupyterLab, its kernel, pandas)
+# in .venv, then JupyterLab on notebooks/ (Ctrl-C stops it; as root, as on CI machines, it needs
+# --allow-root). The notebooks are stored without outputs; tests/test_notebooks.py runs each
+# one top to bottom in `make test`.
+NB_STAMP := $(VENV)/.installed-notebook
+$(NB_STAMP): $(STAMP)
+	$(BIN)/pip install -q -e '.[notebook]'
+	@touch $@
+
+notebook: $(NB_STAMP) $(KERNELS)
+	$(BIN)/jupyter lab --notebook-dir=notebooks $$([ "$$(id -u)" = 0 ] && echo --allow-root)
 
 # A peer for `pelvic-walk bench`: placo in a venv of its own (it pins an older Pinocchio than
 # ours, so it cannot share .venv); the bench finds it there and runs placo's walk loop on our

@@ -229,7 +229,9 @@ class StrategyInfo:
     color: tuple[int, int, int]  # RGB 0-255
     description: str  # the class docstring's first paragraph
     builtin: bool
-    source: str | None  # "FILE.py:Class" of a user's strategy (None for the built-ins)
+    # "FILE.py:Class" of a user's strategy; None for the built-ins and for a user's class
+    # defined in this process (register(cls, builtin=False): a notebook cell)
+    source: str | None
     cls: type[PelvisStrategy]
 
     @property
@@ -247,10 +249,19 @@ def _description(cls: type) -> str:
 
 
 def register(
-    cls: type[PelvisStrategy], source: str | None = None, replace: bool = False
+    cls: type[PelvisStrategy],
+    source: str | None = None,
+    replace: bool = False,
+    builtin: bool | None = None,
 ) -> StrategyInfo:
     """Add a strategy class under its ``name``; ValueError (one line) if the name is taken by
-    another class (``replace`` lets a file loaded again take its own names back)."""
+    another class (``replace`` lets a file loaded again take its own names back).
+
+    ``source`` is the user's ``FILE.py:Class``; without one the class is a built-in, unless
+    ``builtin=False``: a user's class defined in this process (a notebook cell, a script),
+    which no other process can load. Such a class may take back the name of an earlier one
+    of its kind (the cell run again), never a built-in's or a file's."""
+    builtin = source is None if builtin is None else builtin
     if not (isinstance(cls, type) and issubclass(cls, PelvisStrategy)):
         raise ValueError(f"{cls!r} is not a PelvisStrategy subclass")
     name = cls.__dict__.get("name", getattr(cls, "name", ""))
@@ -267,8 +278,13 @@ def register(
         same_file = (
             old.source is not None and source is not None and old.file == source.rpartition(":")[0]
         )
-        if not (replace and same_file):
-            taken = "a built-in strategy" if old.builtin else old.source
+        in_process_again = not builtin and source is None and not old.builtin and old.source is None
+        if not ((replace and same_file) or in_process_again):
+            taken = (
+                "a built-in strategy"
+                if old.builtin
+                else old.source or f"the class {old.cls.__qualname__} defined in this process"
+            )
             raise ValueError(f"{where}: the name {name!r} is taken by {taken}")
     color = cls.color
     if color is not None:
@@ -284,9 +300,7 @@ def register(
         color = free[0] if free else PALETTE[len(_REGISTRY) % len(PALETTE)]
     label = cls.label if isinstance(cls.label, str) and cls.label.strip() else name
     paper_label = cls.paper_label if isinstance(cls.paper_label, str) and cls.paper_label else label
-    info = StrategyInfo(
-        name, label, paper_label, color, _description(cls), source is None, source, cls
-    )
+    info = StrategyInfo(name, label, paper_label, color, _description(cls), builtin, source, cls)
     _REGISTRY[name] = info
     return info
 

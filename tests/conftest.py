@@ -38,10 +38,16 @@ def pytest_collection_modifyitems(config, items):
             item.add_marker(pytest.mark.flaky(reruns=BROWSER_RERUNS))
 
 
+NOTEBOOK_FILE = "test_notebooks.py"  # its notebooks run one per group: the workers share them
+
+
 def xdist_group_of(nodeid: str) -> str:
     """The group a test runs in under xdist: its file, or one group for every real-browser
-    file (``tests/test_browser*.py``: the files whose tests drive Chromium)."""
+    file (``tests/test_browser*.py``: the files whose tests drive Chromium); each course
+    notebook of ``tests/test_notebooks.py`` is a group of its own."""
     path = nodeid.split("::", 1)[0]
+    if Path(path).name == NOTEBOOK_FILE and "[" in nodeid:  # each notebook on its own
+        return nodeid
     return BROWSER_GROUP if Path(path).name.startswith("test_browser") else path
 
 

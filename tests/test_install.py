@@ -26,7 +26,8 @@ import pytest
 from app.local_server import local_server
 
 ROOT = Path(__file__).resolve().parents[1]
-SOURCES = ["pyproject.toml", "README.md", "app", "controller", "models", "static", "report"]
+CODE = ("app", "controller", "models", "pelvic_walk")  # the Python packages' top directories
+SOURCES = ["pyproject.toml", "README.md", *CODE, "static", "report"]
 DATA_PACKAGES = {"app.static": "static", "app.reference_report": "report"}
 
 
@@ -40,7 +41,7 @@ def _run(cmd: list[str], **kwargs) -> str:
 def _checkout_packages() -> dict[str, str]:
     """Every package of the checkout (dotted name -> its directory in the wheel)."""
     found = {}
-    for top in ("app", "controller", "models"):
+    for top in CODE:
         for init in (ROOT / top).rglob("__init__.py"):
             rel = init.parent.relative_to(ROOT)
             if "__pycache__" not in rel.parts:
@@ -86,9 +87,7 @@ def test_the_wheel_holds_every_package_and_its_files(wheel):
     missing = [pkg for pkg, d in packages.items() if f"{d}/__init__.py" not in names]
     assert not missing, f"add {missing} to [tool.setuptools] packages in pyproject.toml"
     sources = {
-        "app": "app",
-        "controller": "controller",
-        "models": "models",
+        **{top: top for top in CODE},
         **{d: name.replace(".", "/") for name, d in DATA_PACKAGES.items()},
     }
     unshipped = [
@@ -159,7 +158,9 @@ def test_app_comes_from_the_wheel(venv):
     home = venv.parent
     code = (
         "import sys, app, app.static, app.reference_report, fastapi_offline, pinocchio\n"
+        "import pelvic_walk\n"
         "print(app.__file__); print(app.static.__file__); print(app.reference_report.__file__)\n"
+        "print(pelvic_walk.__file__)\n"
         "print(any('__editable__' in m for m in sys.modules))\n"
     )
     out = _run([str(venv / "bin" / "python"), "-c", code], cwd=home, env=_clean_env(home))

@@ -1,5 +1,6 @@
 """How ``make test`` shares the test files out between its two xdist workers
-(``tests/conftest.py``): every real-browser file in one group, every other file its own."""
+(``tests/conftest.py``): every real-browser file in one group, each course notebook one, every
+other file its own."""
 
 from __future__ import annotations
 
@@ -21,3 +22,10 @@ def test_other_files_are_a_group_each_whatever_their_parameters():
     c = xdist_group_of("tests/test_pool.py::test_x")
     assert a == b == "tests/test_api.py" and c == "tests/test_pool.py"
     assert BROWSER_GROUP not in (a, c)
+
+
+def test_each_course_notebook_is_a_group_of_its_own():
+    one = xdist_group_of("tests/test_notebooks.py::test_notebook_runs_top_to_bottom[01_a.ipynb]")
+    two = xdist_group_of("tests/test_notebooks.py::test_notebook_runs_top_to_bottom[02_b.ipynb]")
+    rest = xdist_group_of("tests/test_notebooks.py::test_checks_of_runs_read_the_runs")
+    assert len({one, two, rest}) == 3 and rest == "tests/test_notebooks.py"

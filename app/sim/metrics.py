@@ -53,6 +53,51 @@ COLUMNS = (
 )
 
 
+# The unit of each column ("" for counts, flags and ratios): the Python API's tables name
+# their columns with it (``pelvic_walk.Run.series``: "waist_angle [rad]").
+COLUMN_UNITS: dict[str, str] = {
+    "t": "s",
+    "waist_angle": "rad",
+    "waist_angle_cmd": "rad",
+    "waist_rate": "rad/s",
+    "theta_ref": "rad",
+    "yaw_momentum": "kg m^2/s",
+    "h_low": "kg m^2/s",
+    "h_up": "kg m^2/s",
+    "kappa_low": "",
+    "kappa_legs": "",
+    "cop_x": "m",
+    "cop_y": "m",
+    "zmp_in_support": "",
+    "balance_margin": "m",
+    "sole_tilt": "rad",
+    "zmp_ref_x": "m",
+    "zmp_ref_y": "m",
+    "lipm_zmp_x": "m",
+    "lipm_zmp_y": "m",
+    "com_x": "m",
+    "com_y": "m",
+    "com_z": "m",
+    "com_des_x": "m",
+    "com_des_y": "m",
+    "reach_left": "",
+    "reach_right": "",
+    "energy": "J",
+    "energy_substep": "J",
+    "tick_ms": "ms",
+    "strategy_ms": "ms",
+    "step_index": "",
+    "in_ssp": "",
+    "speed_limited": "",
+}
+assert tuple(COLUMN_UNITS) == COLUMNS, "one unit per column, in the columns' order"
+
+
+def with_unit(name: str, unit: str) -> str:
+    """A column's name with its unit: ``"waist_angle [rad]"`` (a bare name without one)."""
+    return f"{name} [{unit}]" if unit else name
+
+
 class ColumnIndex:
     """The position of each column by name (``COL.t`` == 0, ...), so a row is written by
     column name into the series' buffer and cannot go out of line with ``COLUMNS``."""

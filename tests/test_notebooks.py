@@ -1,0 +1,164 @@
+"""The course notebooks (notebooks/): stored without outputs, each runs top to bottom in a
+Jupyter kernel (nbclient) with no error, and the exercises' checks accept the right answer,
+refuse a wrong one and wait for a missing one.
+
+The notebooks run in ``make test`` (``slow``: ``make check`` skips them); each is its own xdist
+group (tests/conftest.py), so the two workers share them.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+NOTEBOOKS = ROOT / "notebooks"
+BOOKS = sorted(p.name for p in NOTEBOOKS.glob("*.ipynb"))
+CELL_TIMEOUT_S = 900  # a cell's walks on a loaded machine; the lessons take ~30 s unloaded
+
+
+def test_the_course_has_its_five_lessons_stored_without_outputs():
+    import nbformat
+
+    assert [b[:2] for b in BOOKS] == ["01", "02", "03", "04", "05"]
+    for name in BOOKS:
+        book = nbformat.read(NOTEBOOKS / name, as_version=4)
+        nbformat.validate(book)
+        assert book.cells[0].cell_type == "markdown", f"{name}: a lesson starts with prose"
+        for cell in book.cells:
+            if cell.cell_type == "code":
+                assert cell.outputs == [] and cell.execution_count is None, (
+                    f"{name}: stored with outputs (clear them before committing)"
+                )
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", BOOKS)
+def test_notebook_runs_top_to_bottom(name, capsys):
+    """Every cell, in order, in a fresh kernel started in notebooks/ (as JupyterLab would)."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    book = nbformat.read(NOTEBOOKS / name, as_version=4)
+    client = NotebookClient(
+        book,
+        timeout=CELL_TIMEOUT_S,
+        kernel_name="python3",
+        resources={"metadata": {"path": str(NOTEBOOKS)}},
+    )
+    start = time.perf_counter()
+    client.execute()  # raises CellExecutionError with the cell and its traceback
+    wall = time.perf_counter() - start
+    printed = [
+        out.get("text", "")
+        for cell in book.cells
+        if cell.cell_type == "code"
+        for out in cell.outputs
+        if out.output_type == "stream"
+    ]
+    verdicts = [line for text in printed for line in text.splitlines() if line[:1] in "✓✗…"]
+    assert verdicts, f"{name}: no exercise check ran"
+    with capsys.disabled():
+        print(f"\n{name}: {wall:.1f} s wall, {len(verdicts)} checks")
+
+
+# -- the checks themselves -------------------------------------------------------------------
+def _checks():
+    spec = importlib.util.spec_from_file_location("course_checks", NOTEBOOKS / "checks.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["course_checks"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_checks_of_numbers_accept_the_right_answer_only(capsys):
+    import pelvic_walk as pw
+
+    checks = _checks()
+    assert checks.eq4(...).ok is None
+    assert checks.eq4(math.sqrt(0.75**2 - 0.68**2)).ok is True
+    assert checks.eq4(0.31 + 0.01).ok is False
+    assert checks.eq4("a lot").ok is False
+    assert checks.best_angle(45).ok is True and checks.best_angle(90).ok is False
+    ours = pw.robot()
+    fixed = math.sqrt(ours["l_leg"] ** 2 - ours["z0"] ** 2)
+    right = 100 * ours["l_pel"] * 0.5 / fixed  # sin 45 cos 45 = 1/2
+    assert checks.our_increase(right).ok is True
+    assert checks.our_increase(35.0).ok is False
+    out = capsys.readouterr().out
+    assert "not answered yet" in out and "✓" in out and "✗" in out and "Hint" in out
+
+
+def test_checks_of_runs_read_the_runs(capsys):
+    import pelvic_walk as pw
+
+    checks = _checks()
+    walk = pw.simulate("mpc", step_length=0.3, steps=2)
+    fixed = pw.simulate("fixed", step_length=0.3, steps=2)
+    s = walk.series
+    plan = walk.horizon(2.0)
+    assert checks.horizon_samples(16, walk).ok is True
+    assert checks.horizon_samples(15, walk).ok is False
+    assert checks.zmp_inside(True, plan).ok is True and checks.zmp_inside(False, plan).ok is False
+    moved = plan.copy()
+    moved["zmp_y [m]"] = moved["zmp_max_y [m]"] + 0.1  # a plan outside its bounds
+    assert checks.zmp_inside(False, moved).ok is True
+
+    row = plan[np.isclose(plan["ahead [s]"], 1.0)].iloc[0]
+    measured = np.interp(row["t [s]"], s["t [s]"], s["com_y [m]"])
+    error_cm = abs(row["com_y [m]"] - measured) * 100
+    assert checks.prediction_error(error_cm, walk, plan, 1.0).ok is True
+    assert checks.prediction_error(error_cm + 1, walk, plan, 1.0).ok is False
+
+    walking = s["step_index"] >= 0
+    d = (s["waist_angle_cmd [rad]"] - s["theta_ref [rad]"])[walking]
+    assert checks.tracking_error(np.degrees(np.sqrt(np.nanmean(d**2))), walk).ok is True
+    assert checks.tracking_error(0.0, walk).ok is False
+
+    ssp = np.flatnonzero((s["step_index"].to_numpy() == 0) & (s["in_ssp"].to_numpy() == 1))
+    at_touchdown = abs(np.degrees(s["waist_angle [rad]"].iloc[ssp[-1]]))
+    assert checks.angle_at_touchdown(at_touchdown, walk).ok is True
+    assert checks.angle_at_touchdown(at_touchdown + 1.0, walk).ok is False
+
+    assert checks.more_turn("high", fixed, walk).ok is True  # walk turns, fixed does not
+    assert checks.more_turn("low", fixed, walk).ok is False
+    assert checks.method_with("mpc", [fixed, walk], "waist_yaw_max_deg").ok is True
+    assert checks.method_with("fixed", [fixed, walk], "waist_yaw_max_deg").ok is False
+    assert checks.method_with("nope", [fixed, walk], "waist_yaw_max_deg").ok is False
+    assert checks.clean_at_long_step({"fixed", "mpc"}, [fixed, walk]).ok is True
+    assert checks.clean_at_long_step({"mpc"}, [fixed, walk]).ok is False
+    a, b = walk.summary["yaw_momentum_peak"], fixed.summary["yaw_momentum_peak"]
+    assert checks.arms_share(100 * (1 - a / b), walk, fixed).ok is True
+    assert checks.clean_beside_mpc(fixed, walk).ok is True
+    assert checks.shortest_walking_horizon(1.6, {1.6: walk}).ok is True
+    assert checks.stopped_at(1.0, walk).ok is False  # nothing stopped it
+    capsys.readouterr()
+
+
+def test_checks_of_a_stopped_strategy():
+    import pelvic_walk as pw
+    from controller import strategy
+
+    checks = _checks()
+
+    class Stops(pw.PelvisStrategy):
+        name = "nb_stops"
+
+        def waist_rate(self, s):
+            return float("nan") if s.t > 1.0 else 0.0
+
+    try:
+        run = pw.simulate(strategy=Stops, step_length=0.2, steps=1)
+    finally:
+        strategy.unregister("nb_stops")
+    assert run.summary["strategy_error"] and run.summary["strategy_error_time"] > 1.0
+    assert checks.stopped_at(run.column("t")[-1], run).ok is True
+    assert checks.stopped_at(0.5, run).ok is False
+    assert checks.clean_beside_mpc(run, run).ok is False
