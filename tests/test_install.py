@@ -173,7 +173,7 @@ def test_serve_from_the_installed_wheel(venv):
     exe = venv / "bin" / "pelvic-walk"
     with local_server(exe=exe, env=_clean_env(home), cwd=home) as server:
         base, viser_port = server.base, server.viser_port
-        with httpx.Client(base_url=base, timeout=15) as client:
+        with httpx.Client(base_url=base, timeout=60) as client:
             page = client.get("/")
             assert page.status_code == 200 and "<title>pelvic-walk" in page.text
             assert f":{viser_port}/" in page.text

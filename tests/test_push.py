@@ -105,5 +105,7 @@ def test_bad_pushes_are_refused_and_the_loop_goes_on(api, body, words):
 def test_a_good_push_is_applied(api):
     c, sim = api
     r = c.post("/api/sim/push", json={"method": "mpc", "force": [0, 60], "duration": 0.1})
-    assert r.status_code == 200 and r.json()["applied"] is True
+    assert r.status_code == 200
+    if not r.json()["applied"]:  # not within the route's wait: a busy machine, no error
+        assert sim.wait_applied(sim.intent, timeout=60) is not None
     assert sim.frame().pushes_done >= 1
