@@ -36,7 +36,7 @@ def _state(client) -> dict:
 def _wait_newer(live: LiveSim, n: int = 3) -> None:
     f = live.frame()
     for _ in range(n):
-        f = live.wait_frame(f.seq, timeout=10)
+        f = live.wait_frame(f.seq, timeout=60)
         assert f is not None
 
 

@@ -86,7 +86,7 @@ def test_pacing_sleeps_to_the_wall_clock():
             frame = sim.wait_frame(frame.seq, timeout=30)
         assert frame is not None
         assert frame.realtime_factor == pytest.approx(2.0, rel=0.05)
-        frame = sim.wait_applied(sim.pause(), timeout=10)
+        frame = sim.wait_applied(sim.pause(), timeout=60)
         # The wall clock is at (simulated time / speed), give or take the burst of one frame
         # (the loop runs a display interval's ticks back to back, then sleeps) and a tick.
         assert wall.slept == pytest.approx(frame.clock / 2.0, abs=1.0 / PUBLISH_HZ + DT)
@@ -203,30 +203,31 @@ def _started(sim: LiveSim):
 def _advance(sim: LiveSim, frames: int = 3):
     f = sim.frame()
     for _ in range(frames):
-        f = sim.wait_frame(f.seq, timeout=10)
+        f = sim.wait_frame(f.seq, timeout=60)
     return f
 
 
 def test_pause_step_and_reset(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"])
-    f = sim.wait_applied(sim.pause(), timeout=10)
+    f = sim.wait_applied(sim.pause(), timeout=60)
     t = [r.t for r in f.robots]
     assert sim.wait_frame(f.seq, timeout=0.5) is None  # paused: nothing new is published
     assert [r.t for r in sim.frame().robots] == t  # and time stands still
-    f = sim.wait_applied(sim.step(), timeout=10)
+    f = sim.wait_applied(sim.step(), timeout=60)
     assert [r.t for r in f.robots] == pytest.approx([x + DT for x in t], abs=1e-9)
     sim.step()
-    f = sim.wait_applied(sim.step(), timeout=10)  # two more single steps
+    f = sim.wait_applied(sim.step(), timeout=60)  # two more single steps
     assert [r.t for r in f.robots] == pytest.approx([x + 3 * DT for x in t], abs=1e-9)
-    f = sim.wait_applied(sim.reset(), timeout=10)
+    f = sim.wait_applied(sim.reset(), timeout=60)
     assert all(r.t <= DT + 1e-9 for r in f.robots)
-    f = sim.wait_applied(sim.resume(), timeout=10)
+    f = sim.wait_applied(sim.resume(), timeout=60)
     assert _advance(sim).robots[0].t > f.robots[0].t
 
 
 def test_params_reach_every_walker_and_methods_rebuild(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"])
-    f = sim.wait_applied(sim.update_params(com={"alpha": 2.0}, walk={"step_length": 0.25}))
+    ticket = sim.update_params(com={"alpha": 2.0}, walk={"step_length": 0.25})
+    assert sim.wait_applied(ticket, timeout=60) is not None
     _started(sim)  # a walker takes new parameters on its next tick: after the start delay
     f = _advance(sim)
     for r in f.robots:
@@ -236,7 +237,7 @@ def test_params_reach_every_walker_and_methods_rebuild(running):
         assert robot.session.walker.params.com.alpha == 2.0
         assert robot.session.walker.params.method == method
     ticket = sim.set_methods(["redundancy", "fixed", "mpc"])
-    f = sim.wait_applied(ticket)
+    f = sim.wait_applied(ticket, timeout=60)
     assert [r.method for r in f.robots] == ["fixed", "redundancy", "mpc"]
     assert [r.slot for r in f.robots] == [0, 1, 2]
     # restarted together: the first frame of the new robots (the kept frames start anew with
@@ -266,7 +267,7 @@ def test_a_finished_plan_restarts_every_robot_together(running):
     ):
         f = sim.wait_frame(f.seq, timeout=60)
     assert f is not None  # both walked their plan, stood, restarted and walk again
-    sim.wait_applied(sim.pause())
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
     frames = _published(sim, 0.0, np.inf)
     done = next(i for i, x in enumerate(frames) if all(r.finished for r in x.robots))
     restarts = _restarts(frames)
@@ -302,11 +303,11 @@ def test_a_frame_that_shows_a_walk_finished_has_counted_it():
 def test_a_fallen_robot_lies_marked_until_every_robot_restarts_together(running):
     sim = running(params=short_params(6), methods=["fixed", "mpc"], speed=4.0)
     _started(sim)
-    sim.wait_applied(sim.pause())
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
     robot = sim.robots["fixed"]
     robot.session.fell = True  # as the world's fall check would mark it
     robot.session.fall_reason = "test: marked as fallen"
-    f = sim.wait_applied(sim.step())
+    f = sim.wait_applied(sim.step(), timeout=60)
     fixed, mpc = f.robots
     assert fixed.fell and fixed.falls == 1 and fixed.last_walk_success is False
     assert fixed.fell_clock == pytest.approx(f.clock - DT, abs=1e-9)  # marked at once
@@ -321,7 +322,7 @@ def test_a_fallen_robot_lies_marked_until_every_robot_restarts_together(running)
     while f is not None and f.robots[0].fell:
         f = sim.wait_frame(f.seq, timeout=30)
     assert f is not None
-    sim.wait_applied(sim.pause())
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
     # every frame published since the one that first showed the fall, not only those this
     # thread woke for
     frames = _published(sim, shown_at, np.inf)
@@ -362,7 +363,7 @@ def test_a_pushed_robot_falls_and_lies_where_it_fell(running):
     while f is not None and f.robots[1].fell:
         f = sim.wait_frame(f.seq, timeout=30)
     assert f is not None
-    sim.wait_applied(sim.pause())
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
     frames = _published(sim, fell_at, np.inf)  # every frame since the fall
     n_down = next(i for i, x in enumerate(frames) if not x.robots[1].fell)
     down, after = frames[:n_down], frames[n_down]
@@ -429,7 +430,7 @@ def test_history_and_kept_frames_are_bounded():
 
 def test_step_to_the_next_liftoff_and_landing(running):
     sim = running(params=short_params(3), methods=["mpc"])
-    f = sim.wait_applied(sim.pause(), timeout=10)
+    f = sim.wait_applied(sim.pause(), timeout=60)
     f = sim.wait_applied(sim.step("liftoff"), timeout=30)
     r = f.robots[0]
     plan = sim.robots["mpc"].session.plan

@@ -62,18 +62,18 @@ def test_a_session_split_across_workers_keeps_step(pool):
         assert all(not r.fell for r in f.robots)
         # intent reaches every part; the session's rows merge one set per robot
         ticket = s.update_params(walk={"step_length": 0.25})
-        f = s.wait_applied(ticket, timeout=20)
+        f = s.wait_applied(ticket, timeout=60)
         assert f is not None and all(r.params.walk.step_length == 0.25 for r in f.robots)
         assert set(s.history.window().rows) == {"fixed", "redundancy", "mpc"}
         # pause and a single step reach every part
-        f = s.wait_applied(s.pause(), timeout=20)
+        f = s.wait_applied(s.pause(), timeout=60)
         before = [r.t for r in f.robots]
-        f = s.wait_applied(s.step(), timeout=20)
+        f = s.wait_applied(s.step(), timeout=60)
         assert [round(r.t - b, 6) for r, b in zip(f.robots, before, strict=True)] == [0.005] * 3
         # a restart while paused (the parts may stand at different clocks): on resume every
         # robot starts at the same session clock, none stands by a step cycle
-        s.wait_applied(s.reset(), timeout=20)
-        f = s.wait_applied(s.resume(), timeout=20)
+        s.wait_applied(s.reset(), timeout=60)
+        f = s.wait_applied(s.resume(), timeout=60)
         while f is not None and any(r.t < 0.5 for r in f.robots):
             f = s.wait_frame(f.seq, timeout=30)
         assert f is not None and not any(r.waiting for r in f.robots)
@@ -93,7 +93,7 @@ def test_a_fall_restarts_every_part_of_the_session_together(pool):
     try:
         assert len(set(s.worker_pids)) == 2
         f = _walked(s, 3.0)
-        s.wait_applied(s.push("mpc", (0.0, 300.0), 0.2), timeout=20)
+        s.wait_applied(s.push("mpc", (0.0, 300.0), 0.2), timeout=60)
         while f is not None and not f.robots[1].fell:
             f = s.wait_frame(f.seq, timeout=30)
         assert f is not None
@@ -343,7 +343,7 @@ def test_a_pause_keeps_every_frame_kept_while_running(pool):
         for _ in range(3):
             f = _walked(s, 1.0)
             span_before = s.frames.span()
-            f = s.wait_applied(s.pause(), timeout=20)
+            f = s.wait_applied(s.pause(), timeout=60)
             while not f.paused:  # every part paused and merged
                 f = s.wait_frame(f.seq, timeout=30)
             kept = s.frames.span()
@@ -352,7 +352,7 @@ def test_a_pause_keeps_every_frame_kept_while_running(pool):
                 kept,
             )
             assert kept[1] - kept[0] > 2.0, kept
-            s.wait_applied(s.resume(), timeout=20)
+            s.wait_applied(s.resume(), timeout=60)
         assert order_kept and all(order_kept)
     finally:
         pool.close(s)

@@ -325,7 +325,7 @@ def test_a_move_in_the_browser_survives_an_intent_change_before_its_callback(pan
     assert handle.value == before
     try:
         handle._impl.value = target  # what viser does with the viewer's message, first
-        sim.wait_applied(sim.set_speed(1.5), 10)  # then an unrelated change is drawn
+        sim.wait_applied(sim.set_speed(1.5), 60)  # then an unrelated change is drawn
         draw()
         assert handle.value == target, "the control was set back over the viewer's move"
         panel._param_changed("walk", "step_length")  # the callback runs at last
@@ -333,19 +333,19 @@ def test_a_move_in_the_browser_survives_an_intent_change_before_its_callback(pan
         draw()
         assert handle.value == target
         # a change from elsewhere (the API, another viewer) still moves the control
-        sim.wait_applied(sim.update_params(walk={"step_length": before}), 10)
+        sim.wait_applied(sim.update_params(walk={"step_length": before}), 60)
         draw()
         assert handle.value == before
 
         f = sim.wait_frame(timeout=30)
         while f.clock < 3.0:  # something kept to seek in
             f = sim.wait_frame(f.seq, timeout=30)
-        assert sim.wait_applied(sim.pause(), 10)
+        assert sim.wait_applied(sim.pause(), 60)
         draw()
         kept = sim.playback().kept
         mid = round((kept[0] + kept[1]) / 2, 2)
         panel.timeline._impl.value = mid  # dragged while paused, the callback not yet run
-        sim.wait_applied(sim.set_speed(1.0), 10)
+        sim.wait_applied(sim.set_speed(1.0), 60)
         draw()
         assert panel.timeline.value == mid
         panel._seek()
@@ -354,7 +354,7 @@ def test_a_move_in_the_browser_survives_an_intent_change_before_its_callback(pan
     finally:
         sim.update_params(walk={"step_length": before})
         sim.set_speed(1.0)
-        sim.wait_applied(sim.resume(), 10)
+        sim.wait_applied(sim.resume(), 60)
 
 
 def test_a_students_panel_is_read_only_and_says_why(panel_view, monkeypatch):
