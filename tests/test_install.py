@@ -32,7 +32,8 @@ DATA_PACKAGES = {"app.static": "static", "app.reference_report": "report"}
 
 def _run(cmd: list[str], **kwargs) -> str:
     kwargs.setdefault("env", {k: v for k, v in os.environ.items() if k != "PYTHONPATH"})
-    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=300, **kwargs)
+    # (a guard against a hang, not a speed target: builds and installs on a busy machine)
+    proc = subprocess.run(cmd, capture_output=True, text=True, timeout=1800, **kwargs)
     assert proc.returncode == 0, f"{cmd}: {proc.stdout[-2000:]}{proc.stderr[-3000:]}"
     return proc.stdout
 

@@ -224,7 +224,7 @@ def test_python_m_app_sweep_reports_without_traceback(tmp_path):
         [sys.executable, "-m", "app.sweep", "--set", "pelvis.k_pel=2", "--out", str(tmp_path)],
         capture_output=True,
         text=True,
-        timeout=120,
+        timeout=300,
     )
     assert proc.returncode == 2
     assert proc.stderr.strip().count("\n") == 0 and "k_pel" in proc.stderr
