@@ -24,12 +24,13 @@ Everything comes from one invocation, on one robot, headless:
    wrapper included) and the max deviation from the exact solution, i.e. a cold one-shot
    DAQP solve of the same QP (an exact active-set solution: its KKT system is solved directly).
 4. **Peer** (``peer``): placo's walk loop (its walk pattern generator and whole-body
-   kinematics QP, no physics) on our robot, in the same run, with our step timing and length
-   (``app/bench_peer.py``, in an interpreter that has placo: ``--peer-python``,
-   ``$PELVIC_WALK_PEER_PYTHON`` or the checkout's ``.venv-peers`` of ``make peers``; placo
-   pins Pinocchio 3.8, so it lives in its own venv). The URDF it loads is written from our
-   MJCF at run time (:func:`urdf_from_mjcf`). Without placo
-   the bench says so and runs the rest.
+   kinematics QP, no physics) on our robot, in the same run, with our step timing and length,
+   re-planning over a fixed horizon of a few steps as placo's walk example does, so its
+   re-planning tick does not grow with ``ticks`` (``app/bench_peer.py``, in an interpreter
+   that has placo: ``--peer-python``, ``$PELVIC_WALK_PEER_PYTHON`` or the checkout's
+   ``.venv-peers`` of ``make peers``; placo pins Pinocchio 3.8, so it lives in its own
+   venv). The URDF it loads is written from our MJCF at run time (:func:`urdf_from_mjcf`).
+   Without placo the bench says so and runs the rest.
 5. **CPU time**: the ``*_cpu`` extras repeat the figures in CPU time of this process
    (``tick_ms_cpu_*`` from a second session), which other jobs on the machine disturb less.
 6. **Paced at 1x** (``paced_core_share``): one robot in a live loop with real sleeps, as a
@@ -469,7 +470,6 @@ def peer_loop(ticks: int, python: str | None = None) -> dict[str, Any]:
             "zmp_margin": p.com.zmp_margin,
             "com_height": w.com_height,
             "held_joints": held,
-            "n_steps": p.walk.n_steps,
             "ssp_timesteps": 10,
             "planned_timesteps": 48,
             "replan_timesteps": 10,
@@ -613,14 +613,16 @@ def format_report(r: dict[str, Any]) -> str:
         lines.append(f"peer: placo's walk loop failed: {peer['error']}")
     else:
         lines += [
-            f"peer: {peer['name']}, our timing and step length, same ticks",
+            f"peer: {peer['name']}, our timing and step length, same ticks, re-planning "
+            f"over {peer['steps_ahead']} steps ({peer['horizon_s']:.1f} s) ahead",
             f"  {'tick [ms]':22s} {'median':>8s} {'mean':>8s} {'p99':>8s} {'max':>8s}",
             f"  {'ours (controller)':22s} {r['tick_ms_median']:8.3f} {r['tick_ms_mean']:8.3f} "
             f"{r['tick_ms_p99']:8.3f} {r['tick_ms_max']:8.3f}",
             f"  {'placo':22s} {peer['tick_ms_median']:8.3f} {peer['tick_ms_mean']:8.3f} "
             f"{peer['tick_ms_p99']:8.3f} {peer['tick_ms_max']:8.3f}   (re-planning ticks "
-            f"{100 * peer['replan_tick_share']:.1f} %, median "
-            f"{peer['replan_tick_ms_median'] or math.nan:.1f} ms)",
+            f"{100 * peer['replan_tick_share']:.1f} % ({peer['replans']}), median "
+            f"{peer['replan_tick_ms_median'] or math.nan:.1f} ms, in CPU time "
+            f"{peer['replan_tick_ms_cpu_median'] or math.nan:.1f} ms)",
         ]
     m = r["machine"]
     lines.append(

@@ -271,8 +271,9 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="PATH",
         help="an interpreter with placo (its own venv: placo pins its own Pinocchio) to run "
-        "placo's walk loop on our robot beside ours (default: $PELVIC_WALK_PEER_PYTHON, or "
-        "this interpreter if it has placo)",
+        "placo's walk loop on our robot beside ours (default: $PELVIC_WALK_PEER_PYTHON, else "
+        "this checkout's .venv-peers/bin/python, which `make peers` creates, else this "
+        "interpreter if it has placo; without one the bench says so and runs the rest)",
     )
 
     p = sub.add_parser(

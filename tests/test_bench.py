@@ -114,3 +114,20 @@ def test_paced_share_is_cpu_per_simulated_second(report):
     share = report["paced_core_share"]
     assert _finite_positive(share) and _finite_positive(report["paced_realtime_factor"])
     assert report["robots_per_core_paced"] == max(1, math.floor(1.0 / share))
+
+
+def test_the_peer_replans_over_a_fixed_horizon():
+    """placo's loop plans a few steps ahead at every re-plan, as placo's walk example does, not
+    the whole walk: a run five times longer re-plans more often over the same horizon and walks
+    on (timings are the bench's business, not checked). Needs an interpreter with placo."""
+    from app.bench import peer_loop, peer_python
+
+    if peer_python() is None:
+        pytest.skip("no interpreter with placo (make peers)")
+    short, long = peer_loop(400), peer_loop(2000)
+    for peer in (short, long):
+        assert "error" not in peer, peer
+    assert short["steps_ahead"] == long["steps_ahead"] and 2 <= long["steps_ahead"] <= 6
+    assert long["horizon_s"] <= 8.0  # a few seconds
+    assert long["replans"] >= 3 * max(short["replans"], 1)
+    assert long["x_travelled"] > 4 * short["x_travelled"] > 0  # it walked on all along

@@ -38,7 +38,7 @@ BAD = [
 @pytest.mark.parametrize("argv", BAD, ids=lambda a: " ".join(a))
 def test_bad_arguments_exit_2_with_one_line(argv):
     proc = subprocess.run(
-        [sys.executable, "-m", "app.cli", *argv], capture_output=True, text=True, timeout=60
+        [sys.executable, "-m", "app.cli", *argv], capture_output=True, text=True, timeout=300
     )
     assert proc.returncode == 2
     lines = [ln for ln in proc.stderr.splitlines() if ln.strip()]

@@ -86,11 +86,11 @@ def test_every_view_of_the_session_shows_the_lesson_the_instructor_started(class
     late = make_view(True)
     views.append(late)
     draw_until(lambda: shown(late), "the late student's view to show the lesson")
-    sim.pause()
     try:
-        f = sim.wait_frame(sim.frame().seq, timeout=30)
-        while not f.paused:
-            f = sim.wait_frame(f.seq, timeout=30)
+        # the frame that shows the pause (the loop publishes it at once; waiting for a frame
+        # newer than the one read after asking could wait for one that never comes)
+        f = sim.wait_applied(sim.pause(), timeout=60)
+        assert f is not None and f.paused
         draw_until(
             lambda: len({v.panel.learn.live.content for v in views}) == 1,
             "the paused frame's numbers in every view",

@@ -15,8 +15,13 @@ BIN = Path(sys.executable).parent
 PATHS = ["app", "controller", "models", "tests"]
 
 
+# [s] a guard against a hung tool, not a speed target: mypy without its cache (a fresh clone)
+# on a busy 2-core machine took more than 300 s (load average 25-35)
+RUN_TIMEOUT_S = 1800
+
+
 def _run(*cmd: str) -> subprocess.CompletedProcess:
-    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=RUN_TIMEOUT_S)
 
 
 def test_ruff_rules_and_formatting():

@@ -86,7 +86,7 @@ def test_pacing_sleeps_to_the_wall_clock():
             frame = sim.wait_frame(frame.seq, timeout=30)
         assert frame is not None
         assert frame.realtime_factor == pytest.approx(2.0, rel=0.05)
-        frame = sim.wait_applied(sim.pause(), timeout=10)
+        frame = sim.wait_applied(sim.pause(), timeout=60)
         # The wall clock is at (simulated time / speed), give or take the burst of one frame
         # (the loop runs a display interval's ticks back to back, then sleeps) and a tick.
         assert wall.slept == pytest.approx(frame.clock / 2.0, abs=1.0 / PUBLISH_HZ + DT)
@@ -159,10 +159,16 @@ def test_a_loop_that_keeps_real_time_reads_a_factor_of_one(publish_hz, cost):
 
 @pytest.fixture
 def running():
+    """Start a LiveSim on a FakeWallClock: the wall clock moves only when the loop sleeps, so
+    the loop never falls behind its time base and publishes a frame every display interval of
+    simulated time (``publish_interval * speed``), however fast the machine runs it (it runs
+    unpaced in real time). Frames then relate to simulated events exactly; a loop on the real
+    clock that catches up publishes by wall time instead, at intervals the machine decides."""
     sims: list[LiveSim] = []
 
     def make(**kw) -> LiveSim:
-        sim = LiveSim(**kw).start()
+        wall = FakeWallClock()
+        sim = LiveSim(clock=wall.clock, sleep=wall.sleep, **kw).start()
         sims.append(sim)
         assert sim.wait_frame(timeout=30) is not None
         return sim
@@ -171,6 +177,18 @@ def running():
     for sim in sims:
         sim.stop()
         assert sim.error is None
+
+
+def _frame_interval(sim: LiveSim) -> float:
+    """[s] of simulated time between two frames of a loop on a FakeWallClock."""
+    return sim.loop.publish_interval * sim.intent.speed
+
+
+def _published(sim: LiveSim, start: float, end: float) -> list:
+    """Every frame the loop published with start <= clock <= end (the session keeps them
+    all, ``sim.frames``), not only those the test thread happened to wake for: a test thread
+    on a busy machine misses frames, and the last one showing an event may be among them."""
+    return sim.frames.between(start, end)
 
 
 def _started(sim: LiveSim):
@@ -185,30 +203,31 @@ def _started(sim: LiveSim):
 def _advance(sim: LiveSim, frames: int = 3):
     f = sim.frame()
     for _ in range(frames):
-        f = sim.wait_frame(f.seq, timeout=10)
+        f = sim.wait_frame(f.seq, timeout=60)
     return f
 
 
 def test_pause_step_and_reset(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"])
-    f = sim.wait_applied(sim.pause(), timeout=10)
+    f = sim.wait_applied(sim.pause(), timeout=60)
     t = [r.t for r in f.robots]
     assert sim.wait_frame(f.seq, timeout=0.5) is None  # paused: nothing new is published
     assert [r.t for r in sim.frame().robots] == t  # and time stands still
-    f = sim.wait_applied(sim.step(), timeout=10)
+    f = sim.wait_applied(sim.step(), timeout=60)
     assert [r.t for r in f.robots] == pytest.approx([x + DT for x in t], abs=1e-9)
     sim.step()
-    f = sim.wait_applied(sim.step(), timeout=10)  # two more single steps
+    f = sim.wait_applied(sim.step(), timeout=60)  # two more single steps
     assert [r.t for r in f.robots] == pytest.approx([x + 3 * DT for x in t], abs=1e-9)
-    f = sim.wait_applied(sim.reset(), timeout=10)
+    f = sim.wait_applied(sim.reset(), timeout=60)
     assert all(r.t <= DT + 1e-9 for r in f.robots)
-    f = sim.wait_applied(sim.resume(), timeout=10)
+    f = sim.wait_applied(sim.resume(), timeout=60)
     assert _advance(sim).robots[0].t > f.robots[0].t
 
 
 def test_params_reach_every_walker_and_methods_rebuild(running):
     sim = running(params=short_params(3), methods=["fixed", "mpc"])
-    f = sim.wait_applied(sim.update_params(com={"alpha": 2.0}, walk={"step_length": 0.25}))
+    ticket = sim.update_params(com={"alpha": 2.0}, walk={"step_length": 0.25})
+    assert sim.wait_applied(ticket, timeout=60) is not None
     _started(sim)  # a walker takes new parameters on its next tick: after the start delay
     f = _advance(sim)
     for r in f.robots:
@@ -217,30 +236,52 @@ def test_params_reach_every_walker_and_methods_rebuild(running):
     for method, robot in sim.robots.items():
         assert robot.session.walker.params.com.alpha == 2.0
         assert robot.session.walker.params.method == method
-    f = sim.wait_applied(sim.set_methods(["redundancy", "fixed", "mpc"]))
+    ticket = sim.set_methods(["redundancy", "fixed", "mpc"])
+    f = sim.wait_applied(ticket, timeout=60)
     assert [r.method for r in f.robots] == ["fixed", "redundancy", "mpc"]
     assert [r.slot for r in f.robots] == [0, 1, 2]
-    assert all(r.t < 0.5 for r in f.robots)  # restarted together
+    # restarted together: the first frame of the new robots (the kept frames start anew with
+    # them) comes one frame interval after they were built, at most that far into their walk
+    first = _published(sim, -np.inf, np.inf)[0]
+    assert first.restarted and first.intent_version >= ticket.version
+    assert [r.method for r in first.robots] == ["fixed", "redundancy", "mpc"]
+    assert all(r.t <= _frame_interval(sim) + 1e-9 for r in first.robots)
+    assert len({r.t for r in first.robots}) == 1
+
+
+def _restarts(frames: list) -> list[int]:
+    """Indices of the frames that show a restart: every robot is rebuilt standing, so the
+    furthest robot time goes back (while they walk or lie it never does)."""
+    return [
+        i
+        for i in range(1, len(frames))
+        if max(r.t for r in frames[i].robots) < max(r.t for r in frames[i - 1].robots)
+    ]
 
 
 def test_a_finished_plan_restarts_every_robot_together(running):
     sim = running(params=short_params(1), methods=["fixed", "mpc"], speed=4.0)
     f = sim.frame()
-    while f is not None and not all(r.finished for r in f.robots):
+    while f is not None and not (
+        f.robots[0].walks_completed >= 1 and all(r.t > 0.05 and not r.finished for r in f.robots)
+    ):
         f = sim.wait_frame(f.seq, timeout=60)
-    assert f is not None  # both stand at the end of their plan, and then restart together
-    # (how much session time passes before is the wall's business: on a busy machine the time
-    # base runs ahead of a late loop, up to CATCH_UP_S, and the restart starts from it; a loop
-    # catching up publishes by wall time, so a frame may show the new walk well begun)
-    t_done = min(r.t for r in f.robots)
-    while f is not None and any(r.finished or r.t < 0.05 for r in f.robots):
-        f = sim.wait_frame(f.seq, timeout=60)
-    assert f is not None
-    for r in f.robots:
-        assert r.walks_completed == 1 and r.last_walk_success is True and r.t < t_done / 2
+    assert f is not None  # both walked their plan, stood, restarted and walk again
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
+    frames = _published(sim, 0.0, np.inf)
+    done = next(i for i, x in enumerate(frames) if all(r.finished for r in x.robots))
+    restarts = _restarts(frames)
+    # the restart is the session's own, made from the first frame that shows them all
+    # finished: the next frame shows the robots rebuilt (and each later walk did the same)
+    assert restarts[0] == done + 1
+    assert sim.intent.auto_restarts == len(restarts)
+    shown, after = frames[done], frames[done + 1]
+    for r in after.robots:
+        assert r.walks_completed == 1 and r.last_walk_success is True and not r.finished
+        assert r.t <= after.clock - shown.clock + 1e-9  # a new walk, begun after the restart
         assert not r.waiting and np.all(np.isfinite(r.body_xpos))
-    assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
-    assert sim.intent.auto_restarts == 1
+    walking = next(x for x in frames[done + 1 :] if x.robots[0].t > 0.05)
+    assert walking.robots[0].t == pytest.approx(walking.robots[1].t, abs=1e-9)  # in step
 
 
 def test_a_frame_that_shows_a_walk_finished_has_counted_it():
@@ -262,38 +303,47 @@ def test_a_frame_that_shows_a_walk_finished_has_counted_it():
 def test_a_fallen_robot_lies_marked_until_every_robot_restarts_together(running):
     sim = running(params=short_params(6), methods=["fixed", "mpc"], speed=4.0)
     _started(sim)
-    sim.wait_applied(sim.pause())
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
     robot = sim.robots["fixed"]
     robot.session.fell = True  # as the world's fall check would mark it
     robot.session.fall_reason = "test: marked as fallen"
-    f = sim.wait_applied(sim.step())
+    f = sim.wait_applied(sim.step(), timeout=60)
     fixed, mpc = f.robots
     assert fixed.fell and fixed.falls == 1 and fixed.last_walk_success is False
     assert fixed.fell_clock == pytest.approx(f.clock - DT, abs=1e-9)  # marked at once
     assert fixed.fall_reason == "test: marked as fallen"
     assert not mpc.fell and mpc.fell_clock is None
-    fell_at, t_fixed = fixed.fell_clock, fixed.t
+    fell_at, t_fixed, shown_at = fixed.fell_clock, fixed.t, f.clock  # (its first frame)
     # paused, the hold does not run out: steps past FALL_HOLD_S of it leave the robot down
     for _ in range(3):
         f = sim.wait_applied(sim.step("liftoff"), timeout=30)
     assert f.robots[0].fell and f.robots[0].t == t_fixed  # its controller stopped
     sim.resume()
-    before = f
     while f is not None and f.robots[0].fell:
-        before, f = f, sim.wait_frame(f.seq, timeout=30)
+        f = sim.wait_frame(f.seq, timeout=30)
     assert f is not None
-    assert before.clock >= fell_at + FALL_HOLD_S - 1e-9  # shown down for the whole hold
-    assert before.robots[1].t > FALL_HOLD_S  # while the other robot walked on
-    # then all restarted together, the falls counted on. The new walk began once the hold
-    # was over, so its time is at most the session time since then; not "t near 0": a loop
-    # catching up (a busy machine, speed 4) publishes by wall time, and the first frame after
-    # the restart may show the new walk well begun
-    for r in f.robots:
-        assert r.t <= f.clock - (fell_at + FALL_HOLD_S) + 1e-9 and r.t < FALL_HOLD_S
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
+    # every frame published since the one that first showed the fall, not only those this
+    # thread woke for
+    frames = _published(sim, shown_at, np.inf)
+    n_down = next(i for i, x in enumerate(frames) if not x.robots[0].fell)
+    down, after = frames[:n_down], frames[n_down]
+    held = fell_at + FALL_HOLD_S - 1e-9
+    # shown down for the whole hold, and restarted at once after it: of the frames published
+    # while running, exactly one, the last, shows it down at or past the hold's end (the
+    # session restarts from that frame; the frames stepped while paused may pass it too)
+    assert [x for x in down if not x.paused and x.clock >= held] == [down[-1]]
+    assert all(x.robots[0].t == t_fixed for x in down)  # lying, no controller
+    assert down[-1].robots[1].t > FALL_HOLD_S  # while the other robot walked on
+    # then all restarted together, the falls counted on; the new walk began after the frame
+    # that made the restart
+    assert _restarts(frames)[0] == n_down
+    for r in after.robots:
+        assert r.t <= after.clock - down[-1].clock + 1e-9
         assert not r.fell and not r.waiting
-    assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
-    assert [r.falls for r in f.robots] == [1, 0]
-    assert sim.intent.auto_restarts == 1 and not f.restarted
+    assert after.robots[0].t == pytest.approx(after.robots[1].t, abs=1e-9)
+    assert [r.falls for r in after.robots] == [1, 0]
+    assert sim.intent.auto_restarts == len(_restarts(frames)) and not after.restarted
     assert sim.frames.span()[0] < fell_at  # the fall is still kept, to scrub back to
 
 
@@ -309,26 +359,27 @@ def test_a_pushed_robot_falls_and_lies_where_it_fell(running):
         f = sim.wait_frame(f.seq, timeout=30)
     assert f is not None and f.robots[1].fell_clock is not None
     assert "tilted" in f.robots[1].fall_reason or "pelvis" in f.robots[1].fall_reason
-    down: list = []
+    fell_at = f.robots[1].fell_clock
     while f is not None and f.robots[1].fell:
-        down.append(f)
         f = sim.wait_frame(f.seq, timeout=30)
     assert f is not None
-    fell_at = down[0].robots[1].fell_clock
-    # the restart comes once the hold is over, not before; the frames are published at the
-    # display rate, so the last one showing the robot down may come a frame before that
-    assert f.clock >= fell_at + FALL_HOLD_S - 1e-9
-    assert down[-1].clock >= fell_at + FALL_HOLD_S - 0.5
+    assert sim.wait_applied(sim.pause(), timeout=60) is not None
+    frames = _published(sim, fell_at, np.inf)  # every frame since the fall
+    n_down = next(i for i, x in enumerate(frames) if not x.robots[1].fell)
+    down, after = frames[:n_down], frames[n_down]
+    # the restart comes once the hold is over, from the first frame at or past its end
+    held = fell_at + FALL_HOLD_S - 1e-9
+    assert down[-1].clock >= held and all(x.clock < held for x in down[:-1])
     late = [d for d in down if d.clock > fell_at + 1.5]  # on the floor by then
     pelvis = np.array([d.robots[1].body_xpos[1] for d in late])
     assert pelvis[:, 2].max() < 0.5  # lying
     assert np.ptp(pelvis[:, :2], axis=0).max() < 0.05  # where it fell, not sliding about
     assert down[-1].robots[0].t > down[0].robots[0].t + 2.0  # the fixed pelvis walked on
     assert not down[-1].robots[0].fell
-    # both began a new walk once the hold was over (at most the time since then: see above)
-    assert all(r.t <= f.clock - (fell_at + FALL_HOLD_S) + 1e-9 for r in f.robots)
-    assert all(r.t < FALL_HOLD_S and not r.fell for r in f.robots)
-    assert f.robots[0].t == pytest.approx(f.robots[1].t, abs=1e-9)
+    # both began a new walk after the frame that made the restart
+    assert all(r.t <= after.clock - down[-1].clock + 1e-9 for r in after.robots)
+    assert all(not r.fell for r in after.robots)
+    assert after.robots[0].t == pytest.approx(after.robots[1].t, abs=1e-9)
 
 
 def test_history_has_one_column_set_per_method(running):
@@ -345,42 +396,41 @@ def test_history_has_one_column_set_per_method(running):
 
 
 def test_history_and_kept_frames_are_bounded():
-    """Run unpaced for 20 s of simulated time keeping 3 s: memory stops growing.
+    """Run 20 s of simulated time keeping 3 s: memory stops growing.
 
-    A frame every tick: the display rate counts wall time, so at a fixed rate an unpaced loop
-    that a busy machine slows down would keep more frames per simulated second (and more
-    bytes) later in the run than earlier, which is not growth."""
+    The loop is stepped here, on a FakeWallClock, with a frame every tick, and the memory kept
+    is read every 0.25 s of simulated time: a thread running it would publish faster than a
+    busy test thread reads, and which frames it read (and so where memory was sampled) would
+    depend on the machine."""
+    wall = FakeWallClock()
     sim = LiveSim(
         short_params(20),
         methods=["fixed", "mpc"],
-        sleep=lambda _s: None,
+        clock=wall.clock,
+        sleep=wall.sleep,
         keep_s=3.0,
         publish_hz=1e9,
     )
     sim.history = type(sim.history)(seconds=8.0)
-    sim.start()
-    try:
-        f = sim.wait_frame(timeout=30)
-        sizes = []  # (clock, bytes kept)
-        while f is not None and f.clock < 20.0:
-            f = sim.wait_frame(f.seq, timeout=30)
-            if f is not None and f.seq % 50 == 0:
-                sizes.append((f.clock, sim.frames.nbytes()))
-        assert f is not None
-        lo, hi = sim.frames.span()
-        assert hi - lo <= 3.0 + 1e-6
-        full = max(b for c, b in sizes if 3.0 < c <= 6.0)  # one window, full
-        assert max(b for c, b in sizes if c > 6.0) < 1.5 * full  # no growth after
-        rows = sim.history.window().rows
-        assert all(len(a) <= sim.history.capacity for a in rows.values())
-        assert max(len(a) for a in rows.values()) == sim.history.capacity
-    finally:
-        sim.stop()
+    sizes = []  # (clock, bytes kept)
+    while sim.loop.clock < 20.0:
+        sim.loop.iterate()
+        f = sim.frame()
+        if f is not None and (not sizes or f.clock >= sizes[-1][0] + 0.25):
+            sizes.append((f.clock, sim.frames.nbytes()))
+    assert sim.error is None
+    lo, hi = sim.frames.span()
+    assert hi - lo <= 3.0 + 1e-6
+    full = max(b for c, b in sizes if 3.0 < c <= 6.0)  # one window, full
+    assert max(b for c, b in sizes if c > 6.0) < 1.5 * full  # no growth after
+    rows = sim.history.window().rows
+    assert all(len(a) <= sim.history.capacity for a in rows.values())
+    assert max(len(a) for a in rows.values()) == sim.history.capacity
 
 
 def test_step_to_the_next_liftoff_and_landing(running):
     sim = running(params=short_params(3), methods=["mpc"])
-    f = sim.wait_applied(sim.pause(), timeout=10)
+    f = sim.wait_applied(sim.pause(), timeout=60)
     f = sim.wait_applied(sim.step("liftoff"), timeout=30)
     r = f.robots[0]
     plan = sim.robots["mpc"].session.plan

@@ -44,31 +44,36 @@ def test_a_session_split_across_workers_keeps_step(pool):
         f = _walked(s, 3.0)
         assert [r.method for r in f.robots] == ["fixed", "redundancy", "mpc"]
         assert [r.slot for r in f.robots] == [0, 1, 2]
-        # one time base: the robots started together (robot time = part clock - start clock)
+        # one time base: the robots walk in phase (robot time = part clock - start clock). A
+        # part that built its robot after the session's start clock stands by and joins a
+        # whole step cycle later: a worker's first robot loads the compiled kernels (about
+        # 0.4 s of CPU), which a busy machine can stretch past START_DELAY_S of wall time.
+        # The restart while paused below, which leaves every part time to build, starts them
+        # at one clock exactly.
         starts = [r.clock - r.t for r in f.robots]
-        assert max(starts) - min(starts) < 0.011, starts  # two ticks
+        cycle = 2 * PARAMS.walk.step_time
+        apart = [(x - starts[0]) % cycle for x in starts]
+        assert all(min(a, cycle - a) < 0.011 for a in apart), starts  # two ticks
         # and the merged frame shows every robot at the slowest part's instant (its newest
-        # frame not later than it), however far one worker ran ahead
+        # frame not later than it; how far apart the parts' frames lie depends on how the
+        # machine runs the workers: test_parts_merge_at_the_slowest_parts_instant)
         clocks = [r.clock for r in f.robots]
         assert max(clocks) <= f.clock + 1e-9 and f.clock in clocks, (f.clock, clocks)
-        # a few published frames apart, not a drift (a worker starved by the machine's other
-        # jobs publishes sparsely: 0.94 s was seen in a fresh clone's make test)
-        assert max(clocks) - min(clocks) < 1.5, clocks
         assert all(not r.fell for r in f.robots)
         # intent reaches every part; the session's rows merge one set per robot
         ticket = s.update_params(walk={"step_length": 0.25})
-        f = s.wait_applied(ticket, timeout=20)
+        f = s.wait_applied(ticket, timeout=60)
         assert f is not None and all(r.params.walk.step_length == 0.25 for r in f.robots)
         assert set(s.history.window().rows) == {"fixed", "redundancy", "mpc"}
         # pause and a single step reach every part
-        f = s.wait_applied(s.pause(), timeout=20)
+        f = s.wait_applied(s.pause(), timeout=60)
         before = [r.t for r in f.robots]
-        f = s.wait_applied(s.step(), timeout=20)
+        f = s.wait_applied(s.step(), timeout=60)
         assert [round(r.t - b, 6) for r, b in zip(f.robots, before, strict=True)] == [0.005] * 3
         # a restart while paused (the parts may stand at different clocks): on resume every
         # robot starts at the same session clock, none stands by a step cycle
-        s.wait_applied(s.reset(), timeout=20)
-        f = s.wait_applied(s.resume(), timeout=20)
+        s.wait_applied(s.reset(), timeout=60)
+        f = s.wait_applied(s.resume(), timeout=60)
         while f is not None and any(r.t < 0.5 for r in f.robots):
             f = s.wait_frame(f.seq, timeout=30)
         assert f is not None and not any(r.waiting for r in f.robots)
@@ -88,14 +93,23 @@ def test_a_fall_restarts_every_part_of_the_session_together(pool):
     try:
         assert len(set(s.worker_pids)) == 2
         f = _walked(s, 3.0)
-        s.wait_applied(s.push("mpc", (0.0, 300.0), 0.2), timeout=20)
+        s.wait_applied(s.push("mpc", (0.0, 300.0), 0.2), timeout=60)
         while f is not None and not f.robots[1].fell:
             f = s.wait_frame(f.seq, timeout=30)
         assert f is not None
         fell_at = f.robots[1].fell_clock
         while f is not None and f.robots[1].fell:
-            last, f = f, s.wait_frame(f.seq, timeout=30)
-        assert f is not None and last.clock >= fell_at + FALL_HOLD_S - 1e-9
+            f = s.wait_frame(f.seq, timeout=30)
+        assert f is not None
+        # every merged frame since the fall (the session keeps them), not only those this
+        # thread woke for: each one that shows the mpc part as it was after its fall (a merged
+        # frame shows a part's newest frame up to its instant, so the first ones after the fall
+        # may show the last before it) shows it down until the hold's end, and the last one
+        # showing it down is at or past that end
+        held = fell_at + FALL_HOLD_S - 1e-9
+        frames = s.frames.between(fell_at, f.clock)
+        assert all(x.robots[1].fell for x in frames if fell_at <= x.robots[1].clock < held)
+        assert max(x.clock for x in frames if x.robots[1].fell) >= held
         while f is not None and any(r.t < 0.5 for r in f.robots):
             f = s.wait_frame(f.seq, timeout=30)
         assert f is not None and not any(r.fell or r.waiting for r in f.robots)
@@ -138,7 +152,7 @@ def test_a_dead_worker_is_reported_replaced_and_its_sessions_restart(pool):
             _walked(shared, 1.0)
             victim = next(w for w in pool.workers() if w["robots"])
             os.kill(victim["pid"], signal.SIGKILL)
-            deadline = time.monotonic() + 90
+            deadline = time.monotonic() + 180  # a new worker imports MuJoCo first: slow if busy
             health = client.get("/api/health").json()
             while time.monotonic() < deadline and not (
                 health["worker_deaths"]
@@ -172,6 +186,60 @@ def test_a_part_is_shown_at_its_newest_frame_not_later_than_the_instant():
     assert _at(recent, 1.2).clock == 1.2
     assert _at(recent, 5.0).clock == 1.3
     assert _at(recent, 0.5).clock == 1.0  # ran ahead beyond the kept window: its oldest
+
+
+def test_parts_merge_at_the_slowest_parts_instant():
+    """The merge of a session's parts, on frames made by real loops stepped here (the split
+    session above runs it on worker processes, where how far apart the parts' frames lie is
+    the machine's business): however far one part runs ahead, every merged frame shows the
+    slowest part's newest instant and each other robot at its part's newest frame not later,
+    within one display interval of it; a part ahead by more than the kept window shows its
+    oldest kept frame."""
+    import dataclasses
+    from types import SimpleNamespace
+
+    from app.live.loop import LiveLoop
+    from app.live.pool import ALIGN_S, RemoteSession
+
+    def part_frames(method: str, seconds: float) -> list:
+        """A one-robot part's frames at the display rate, its wall clock free-running."""
+        intent = dataclasses.replace(initial_intent(PARAMS, [method]), anchor=(0.0, 0.0))
+        wall, out = [0.0], []
+        loop = LiveLoop(
+            lambda: intent,
+            out.append,
+            clock=lambda: wall[0],
+            sleep=lambda dt: wall.__setitem__(0, wall[0] + dt),
+        )
+        while loop.clock < seconds:
+            loop.iterate()
+        return out
+
+    lead, other = part_frames("fixed", 8.0), part_frames("mpc", 8.0)
+    interval = 1.0 / 30.0  # PUBLISH_HZ at speed 1
+    for ahead in (0.0, 0.5, 2.0, ALIGN_S + 1.0):  # [s] the other part runs ahead by
+        pool = SimpleNamespace(publish_hz=30.0, sync_parts=lambda *_: None)
+        s = RemoteSession("m", initial_intent(PARAMS, ["fixed", "mpc"]), pool)
+        s.parts = dict.fromkeys(("fixed", "mpc"), SimpleNamespace(send=lambda _m: None))
+        merged: list = []
+        s.receive = merged.append  # the merged frames, in order
+        ahead_frames = iter(other)
+        nxt = next(ahead_frames)
+        for f in lead:  # the other part's frames up to `ahead` later arrive first
+            while nxt is not None and nxt.clock <= f.clock + ahead + 1e-9:
+                s.receive_part("mpc", nxt)
+                nxt = next(ahead_frames, None)
+            s.receive_part("fixed", f)
+        both = [m for m in merged if len(m.robots) == 2]  # (before the lead's first frame,
+        assert len(both) >= len(lead) - 1  # the robots of the parts heard from are shown)
+        for m in both:
+            fixed, mpc = m.robots
+            assert (fixed.method, mpc.method) == ("fixed", "mpc")
+            assert m.clock == fixed.clock  # the lead part is the slowest here
+            if ahead <= ALIGN_S - 0.5:
+                assert m.clock - interval - 1e-9 <= mpc.clock <= m.clock + 1e-9, (ahead, m.clock)
+            elif m.clock + ahead < other[-1].clock - interval:  # (its frames go on)
+                assert mpc.clock > m.clock  # beyond its kept window: its oldest kept frame
 
 
 def test_without_a_shared_demo_every_slot_is_for_private_sessions(pool):
@@ -275,7 +343,7 @@ def test_a_pause_keeps_every_frame_kept_while_running(pool):
         for _ in range(3):
             f = _walked(s, 1.0)
             span_before = s.frames.span()
-            f = s.wait_applied(s.pause(), timeout=20)
+            f = s.wait_applied(s.pause(), timeout=60)
             while not f.paused:  # every part paused and merged
                 f = s.wait_frame(f.seq, timeout=30)
             kept = s.frames.span()
@@ -284,7 +352,7 @@ def test_a_pause_keeps_every_frame_kept_while_running(pool):
                 kept,
             )
             assert kept[1] - kept[0] > 2.0, kept
-            s.wait_applied(s.resume(), timeout=20)
+            s.wait_applied(s.resume(), timeout=60)
         assert order_kept and all(order_kept)
     finally:
         pool.close(s)

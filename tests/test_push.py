@@ -96,8 +96,8 @@ def test_bad_pushes_are_refused_and_the_loop_goes_on(api, body, words):
     r = c.post("/api/sim/push", json=body)
     assert r.status_code == 422, r.text
     assert words in r.text
-    later = sim.wait_frame(before.seq, timeout=10)
-    later = sim.wait_frame(later.seq, timeout=10)
+    later = sim.wait_frame(before.seq, timeout=60)
+    later = sim.wait_frame(later.seq, timeout=60)
     assert later is not None and later.clock > before.clock
     assert sim.running and sim.error is None
 
@@ -105,5 +105,7 @@ def test_bad_pushes_are_refused_and_the_loop_goes_on(api, body, words):
 def test_a_good_push_is_applied(api):
     c, sim = api
     r = c.post("/api/sim/push", json={"method": "mpc", "force": [0, 60], "duration": 0.1})
-    assert r.status_code == 200 and r.json()["applied"] is True
+    assert r.status_code == 200
+    if not r.json()["applied"]:  # not within the route's wait: a busy machine, no error
+        assert sim.wait_applied(sim.intent, timeout=60) is not None
     assert sim.frame().pushes_done >= 1

@@ -254,38 +254,49 @@ def test_the_panel_the_state_and_the_sessions_list_agree_after_every_transition(
             assert listed["shown_t"] is None and panel.timeline.disabled is True
         return state
 
+    def done(answer: dict) -> bool:
+        """A playback answer, once the loop has carried it out: within the route's wait it
+        says so; on a machine too busy for that it answers false (no error) and we wait."""
+        return answer["applied"] or sim.wait_applied(sim.intent, timeout=60) is not None
+
     f = sim.wait_frame(timeout=30)
     while f.clock < 3.0:
         f = sim.wait_frame(f.seq, timeout=30)
     agree(False, False)
-    assert client.post("/api/sim/pause").json()["applied"]
+    assert done(client.post("/api/sim/pause").json())
     state = agree(True, False)
     target = (state["kept"]["start"] + state["kept"]["end"]) / 2
     assert client.post("/api/sim/seek", json={"t": target}).status_code == 200
     state = agree(True, True)
-    assert state["shown_t"] == pytest.approx(target, abs=0.1)
+    assert state["shown_t"] == sim.frames.nearest(target).clock  # the kept instant nearest
     assert "replaying" in read()[3]
-    assert client.post("/api/sim/step").json()["applied"]  # back to the present, one tick on
+    assert done(client.post("/api/sim/step").json())  # back to the present, one tick on
     state = agree(True, False)
     assert state["clock"] == pytest.approx(state["kept"]["end"])
     client.post("/api/sim/seek", json={"t": target})
-    assert client.post("/api/sim/resume").json()["applied"]
+    assert done(client.post("/api/sim/resume").json())
     state = agree(False, False)
     # running, the timeline spans what is kept now, not the range it had when paused
     f = sim.wait_frame(sim.frame().seq, timeout=30)
     while f.clock < state["kept"]["end"] + 1.0:
         f = sim.wait_frame(f.seq, timeout=30)
-    _state, _listed, panel, _status = read()
-    kept = sim.playback().kept
-    assert panel.timeline.max == pytest.approx(kept[1], abs=0.2)
+    # the end of what is kept moves on while the view draws: the timeline's end lies between
+    # what was kept just before the draw and just after (rounded to 1 ms)
+    before = sim.playback().kept[1]
+    clock[0] += 10.0
+    view.draw(clock[0])
+    after = sim.playback().kept[1]
+    panel = view.panel
+    assert before - 1e-3 <= panel.timeline.max <= after + 1e-3, (before, after)
+    assert before > state["kept"]["end"] + 1.0 - 1e-9  # the range it has now, not when paused
     assert panel.timeline.value == pytest.approx(panel.timeline.max)
-    assert client.post("/api/sim/reset").json()["applied"]
+    assert done(client.post("/api/sim/reset").json())
     agree(False, False)
-    assert client.post("/api/sim/pause").json()["applied"]
-    assert client.post("/api/sim/reset").json()["applied"]  # a restart while paused stays paused
+    assert done(client.post("/api/sim/pause").json())
+    assert done(client.post("/api/sim/reset").json())  # a restart while paused stays paused
     agree(True, False)
     client.post("/api/sim/resume")
-    assert client.put("/api/sim/speed", json={"speed": 2.0}).json()["applied"]
+    assert done(client.put("/api/sim/speed", json={"speed": 2.0}).json())
     assert agree(False, False)["speed"] == 2.0
     assert "Running at 2x" in read()[3]
     client.put("/api/sim/speed", json={"speed": 1.0})
@@ -314,7 +325,7 @@ def test_a_move_in_the_browser_survives_an_intent_change_before_its_callback(pan
     assert handle.value == before
     try:
         handle._impl.value = target  # what viser does with the viewer's message, first
-        sim.wait_applied(sim.set_speed(1.5), 10)  # then an unrelated change is drawn
+        sim.wait_applied(sim.set_speed(1.5), 60)  # then an unrelated change is drawn
         draw()
         assert handle.value == target, "the control was set back over the viewer's move"
         panel._param_changed("walk", "step_length")  # the callback runs at last
@@ -322,19 +333,19 @@ def test_a_move_in_the_browser_survives_an_intent_change_before_its_callback(pan
         draw()
         assert handle.value == target
         # a change from elsewhere (the API, another viewer) still moves the control
-        sim.wait_applied(sim.update_params(walk={"step_length": before}), 10)
+        sim.wait_applied(sim.update_params(walk={"step_length": before}), 60)
         draw()
         assert handle.value == before
 
         f = sim.wait_frame(timeout=30)
         while f.clock < 3.0:  # something kept to seek in
             f = sim.wait_frame(f.seq, timeout=30)
-        assert sim.wait_applied(sim.pause(), 10)
+        assert sim.wait_applied(sim.pause(), 60)
         draw()
         kept = sim.playback().kept
         mid = round((kept[0] + kept[1]) / 2, 2)
         panel.timeline._impl.value = mid  # dragged while paused, the callback not yet run
-        sim.wait_applied(sim.set_speed(1.0), 10)
+        sim.wait_applied(sim.set_speed(1.0), 60)
         draw()
         assert panel.timeline.value == mid
         panel._seek()
@@ -343,13 +354,15 @@ def test_a_move_in_the_browser_survives_an_intent_change_before_its_callback(pan
     finally:
         sim.update_params(walk={"step_length": before})
         sim.set_speed(1.0)
-        sim.wait_applied(sim.resume(), 10)
+        sim.wait_applied(sim.resume(), 60)
 
 
-def test_a_students_panel_is_read_only_and_says_why(panel_view):
+def test_a_students_panel_is_read_only_and_says_why(panel_view, monkeypatch):
     """With an instructor, a student's view of the shared demo: every control that changes
     the session is disabled, a click that still arrives is refused with a message, and what
     is the viewer's own (camera, layers, recording) stays enabled."""
+    import threading
+
     import viser
 
     from app.live.registry import SessionRegistry
@@ -370,13 +383,25 @@ def test_a_students_panel_is_read_only_and_says_why(panel_view):
         assert all(b.disabled for b in panel.learn.buttons)
         assert not any(b.disabled for b in panel.layer_boxes.values())
         assert not panel.record.button.disabled
-        version = sim.intent.version
+        # who changes the session's intent: its loop does by itself (a restart when a plan
+        # ends, the time base moving after a late loop), a click that got through would here
+        writers: list[str] = []
+        modify = sim._box.modify  # noqa: SLF001 - the one place intent changes
+
+        def spy(changes_of):
+            writers.append(threading.current_thread().name)
+            return modify(changes_of)
+
+        monkeypatch.setattr(sim._box, "modify", spy)  # noqa: SLF001
         panel._step("5 ms tick")
         panel._toggle_pause()
         panel.learn.start(5)
         panel.apply_preset(next(iter(PRESETS)))
-        assert sim.intent.version == version  # nothing reached the session
+        here = threading.current_thread().name
+        assert here not in writers  # nothing reached the session
         assert panel._message == REFUSED
+        sim.set_speed(sim.intent.speed)  # (the spy sees a change made here)
+        assert here in writers
     finally:
         server.stop()
 
