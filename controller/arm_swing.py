@@ -27,8 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from controller.compiled import kernel
 from controller.ik import velocity_bounds
-from controller.jit import kernel
 from controller.params import ArmParams
 from controller.qp import QP, QpSolver, frozen
 
@@ -39,10 +39,9 @@ def yaw_momentum(a_yaw: np.ndarray, q_dot: np.ndarray) -> float:
 
 
 @kernel
-def _arm_cost(a_low_yaw, q_dot_low, a, q, q_up_init, w1, w2, w3, dt):
-    """P (n, n) and q (n,) of eq. (43): h_low = a_low . q_dot_low (eq. 41),
+def _arm_cost(h_low, a, q, q_up_init, w1, w2, w3, dt):
+    """P (n, n) and q (n,) of eq. (43) for the lower body's yaw momentum h_low (eq. 41):
     P = omega1 a a' + (omega2 dt^2 + omega3) I, q = omega1 h_low a - omega2 dt (q_init - q)."""
-    h_low = np.dot(a_low_yaw, q_dot_low)
     r = q_up_init - q  # (n,) pose error [rad]
     n = a.shape[0]
     P = w1 * (a.reshape(n, 1) * a.reshape(1, n))  # omega1 a a'
@@ -82,8 +81,7 @@ def build_arm_qp(
     a = np.asarray(a_up_yaw, dtype=float)
     q = np.asarray(q_up, dtype=float)
     P, c = _arm_cost(
-        np.asarray(a_low_yaw, dtype=float),
-        np.asarray(q_dot_low, dtype=float),
+        yaw_momentum(a_low_yaw, q_dot_low),  # h_low, eq. (41)
         a,
         q,
         np.asarray(q_up_init, dtype=float),

@@ -49,9 +49,11 @@ Choices where the paper is vague (docs/DESIGN.md):
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from controller.jit import kernel
+from controller.compiled import kernel
 from controller.params import LATERAL_MODES
 
 HIP_HALF_WIDTH = 0.105  # [m] lateral distance from the pelvis centre to each hip joint
@@ -125,8 +127,8 @@ def _reference_angles(p_pelvis, p_left, p_right, k_pel, lateral):
         i = k if lateral.shape[0] > 1 else 0
         dx_left = p_left[k, 0] - p_pelvis[k, 0]  # eq. (28)
         dx_right = p_right[k, 0] - p_pelvis[k, 0]  # eq. (29)
-        left = np.arctan(k_pel * dx_left / lateral[i, 0])  # eq. (31)
-        right = np.arctan(k_pel * dx_right / lateral[i, 1])  # eq. (32)
+        left = math.atan(k_pel * dx_left / lateral[i, 0])  # eq. (31)
+        right = math.atan(k_pel * dx_right / lateral[i, 1])  # eq. (32)
         out[k] = -0.5 * (left + right)  # eq. (30), (33)
     return out
 

@@ -21,8 +21,8 @@ import numpy as np
 
 from app.sim.metrics import COL, COLUMNS, Series, two_step_windows
 from app.sim.world import Contacts, World
+from controller.compiled import kernel
 from controller.footsteps import FootstepPlan
-from controller.jit import kernel
 from controller.kinematics import RobotKinematics
 from controller.params import ControllerParams
 from controller.walker import TickOutput, Walker
