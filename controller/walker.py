@@ -171,6 +171,8 @@ class Walker:
         self.theta_dot = 0.0  # [rad/s] the pelvic MPC's integrated rate (eq. 38)
         self._last_waist_rate = 0.0  # [rad/s] waist rate of the last IK solution
         self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
+        self.ticks = 0  # ticks run
+        self.failed_ticks = 0  # ticks on which some QP failed (the layer fell back)
         self._pending: ControllerParams | None = None
         self._com_des_prev: np.ndarray | None = None
         self._plan_table: TickSamples | None = None  # the plan's rows of the coming ticks
@@ -339,9 +341,13 @@ class Walker:
             "ik": not ik_ok,
             "arm_swing": not arm_ok,
         }
+        failed_tick = False
         for name, failed in failures.items():
             if failed:
                 self.failure_counts[name] += 1
+                failed_tick = True
+        self.ticks += 1
+        self.failed_ticks += failed_tick
         self.t = t + dt
         return TickOutput(
             t=t,
