@@ -116,12 +116,8 @@ def test_redundancy_moves_waist_when_useful():
     J = _J(10)
     v = J[:, WAIST] * 1.0  # exactly the waist's own motion
     p = IkParams(damping=1e-3)
-    qd_fixed, _ = solve_ik(
-        build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, 0.0), QpSolver("daqp")
-    )
-    qd_red, ok = solve_ik(
-        build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, None), QpSolver("daqp")
-    )
+    qd_fixed, _ = solve_ik(build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, 0.0), QpSolver("daqp"))
+    qd_red, ok = solve_ik(build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, None), QpSolver("daqp"))
     assert ok and abs(qd_fixed[WAIST]) < 1e-12
     assert qd_red[WAIST] > 0.5
     assert np.sum(qd_red**2) < np.sum(qd_fixed**2)
