@@ -33,15 +33,17 @@ from controller.params import ArmParams
 from controller.qp import QP, QpSolver, frozen
 
 
-def yaw_momentum(a_yaw: np.ndarray, q_dot: np.ndarray) -> float:
-    """Yaw angular momentum a_yaw . q_dot [kg m^2/s] (eq. 41 or 42)."""
-    return float(np.dot(np.asarray(a_yaw, dtype=float), np.asarray(q_dot, dtype=float)))
+@kernel
+def yaw_momentum(a_yaw, q_dot):
+    """Yaw angular momentum a_yaw . q_dot [kg m^2/s] (eq. 41 or 42) of float arrays."""
+    return np.dot(a_yaw, q_dot)
 
 
 @kernel
-def _arm_cost(h_low, a, q, q_up_init, w1, w2, w3, dt):
-    """P (n, n) and q (n,) of eq. (43) for the lower body's yaw momentum h_low (eq. 41):
+def _arm_cost(a_low_yaw, q_dot_low, a, q, q_up_init, w1, w2, w3, dt):
+    """P (n, n) and q (n,) of eq. (43): h_low = a_low . q_dot_low (eq. 41),
     P = omega1 a a' + (omega2 dt^2 + omega3) I, q = omega1 h_low a - omega2 dt (q_init - q)."""
+    h_low = yaw_momentum(a_low_yaw, q_dot_low)
     r = q_up_init - q  # (n,) pose error [rad]
     n = a.shape[0]
     P = w1 * (a.reshape(n, 1) * a.reshape(1, n))  # omega1 a a'
@@ -81,7 +83,8 @@ def build_arm_qp(
     a = np.asarray(a_up_yaw, dtype=float)
     q = np.asarray(q_up, dtype=float)
     P, c = _arm_cost(
-        yaw_momentum(a_low_yaw, q_dot_low),  # h_low, eq. (41)
+        np.asarray(a_low_yaw, dtype=float),
+        np.asarray(q_dot_low, dtype=float),
         a,
         q,
         np.asarray(q_up_init, dtype=float),

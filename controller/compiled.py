@@ -274,8 +274,11 @@ class DaqpBinding:
             except AttributeError:
                 raise DaqpBindingError(f"{path} has no function {name}") from None
             fn.argtypes, fn.restype = args, result
-        libc = ctypes.CDLL(None)
-        self.calloc, self.free = libc.calloc, libc.free
+        try:
+            libc = ctypes.CDLL(None)  # the process's C library (POSIX)
+            self.calloc, self.free = libc.calloc, libc.free
+        except (OSError, TypeError, AttributeError) as exc:
+            raise DaqpBindingError(f"no C library's calloc and free: {exc}") from exc
         self.calloc.restype, self.calloc.argtypes = _P, [ctypes.c_size_t, ctypes.c_size_t]
         self.free.argtypes = [_P]
 
@@ -316,7 +319,10 @@ def daqp_binding() -> DaqpBinding | None:
 def _bind() -> DaqpBinding:
     """Load, declare and check the binding (:func:`daqp_binding`)."""
     global _setup_daqp, _daqp_update_ldp, _daqp_solve
-    version = importlib.metadata.version("daqp")
+    try:
+        version = importlib.metadata.version("daqp")
+    except importlib.metadata.PackageNotFoundError:
+        version = "of unknown version"
     if version.split(".")[:2] != DAQP_HEADERS.split("."):
         raise DaqpBindingError(
             f"daqp {version} is installed; the binding copies the structures of daqp {DAQP_HEADERS}"
