@@ -195,3 +195,33 @@ def test_numba_and_ctypes_stay_behind_the_compiled_layer():
             else:
                 continue
             assert not banned & names, f"{path.relative_to(ROOT)} imports {names}"
+
+
+def test_a_live_walk_whose_qps_all_fail_finishes_with_no_success(unbound):
+    """The live tool: a robot whose QPs all fail finishes its plan standing; its walk is no
+    success, and its label says so and why."""
+    import dataclasses
+
+    from app.live.loop import LiveLoop
+    from app.live.session import initial_intent
+    from app.web.scene import label_text
+
+    compiled.daqp_binding()
+    unbound.setattr(compiled.DaqpWorkspace, "solve", lambda self, *args: (-3, -1))
+    params = ControllerParams().replace(walk={"n_steps": 1})
+    intent = dataclasses.replace(initial_intent(params, ["fixed"]), anchor=(0.0, 0.0))
+    frames: list = []
+    wall = [0.0]
+
+    def sleep(seconds: float) -> None:
+        wall[0] += seconds
+
+    loop = LiveLoop(
+        lambda: intent, frames.append, clock=lambda: wall[0], sleep=sleep, publish_hz=1e6
+    )
+    while not frames or not frames[-1].robots[0].finished:
+        loop.iterate()
+    robot = frames[-1].robots[0]
+    assert robot.walks_completed == 1 and robot.last_walk_success is False
+    assert "QPs failed on 100 % of the ticks" in robot.unsuccessful
+    assert "NO SUCCESS" in label_text(robot, frames[-1])
