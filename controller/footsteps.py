@@ -239,10 +239,7 @@ class FootstepPlan:
     @cached_property
     def zmp_at_walk_end(self) -> np.ndarray:
         """(2,) [m] the ZMP reference when the closing step ends."""
-        support = self.support_pos[-1, :2]
-        if self.step_dsp_end[-1] > 0.0:
-            return 0.5 * (support + self.swing_to[-1, :2])
-        return support.copy()
+        return _zmp_at_step_end(self.support_pos[-1], self.swing_to[-1], self.step_dsp_end[-1])
 
     # -- replanning -----------------------------------------------------------------------
     def replanned(self, walk: WalkParams, t_now: float) -> FootstepPlan:
@@ -497,6 +494,12 @@ class _Steps:
         return np.array([getattr(r, name) for r in self.rows], dtype=dtype)
 
 
+def _zmp_at_step_end(support: np.ndarray, to: np.ndarray, dsp_end: float) -> np.ndarray:
+    """(2,) [m] where a step leaves the ZMP reference: on its support foot, or, with a DSP
+    after the touch-down, at the midpoint of the support and the landed foot."""
+    return support[:2] + (0.5 * (to[:2] - support[:2]) if dsp_end > 0 else 0.0)
+
+
 def _finish(
     walk: WalkParams,
     t_start: float,
@@ -521,10 +524,7 @@ def _finish(
         last = steps.rows[-1]
         t = last.start + last.duration
         swing = 1 - last.side
-        # the ZMP where the last step left it: its support foot, or on to the landed foot
-        zmp_prev = last.support[:2] + (
-            0.5 * (last.to[:2] - last.support[:2]) if last.dsp_end > 0 else 0.0
-        )
+        zmp_prev = _zmp_at_step_end(last.support, last.to, last.dsp_end)
     else:
         t = t_start
         swing = first_swing
@@ -550,7 +550,7 @@ def _finish(
             dsp_end=dsp_end,
         )
         feet[swing] = to
-        zmp_prev = support[:2] + (0.5 * (to[:2] - support[:2]) if dsp_end > 0 else 0.0)
+        zmp_prev = _zmp_at_step_end(support, to, dsp_end)
         t += walk.step_time
         swing = 1 - swing
     final_dsp = dsp
