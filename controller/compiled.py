@@ -13,8 +13,8 @@ Python twin.
 **Switched off**, with numba's own switch ``NUMBA_DISABLE_JIT=1`` (to step through a layer in
 pdb) or without numba installed, :func:`kernel` returns the function itself: the same code
 runs as plain Python and numpy, and DAQP's C functions are called through ctypes, the same
-calls in the same order. A walk's summary is then the compiled one's (tests/test_compiled.py),
-about 30 times slower.
+calls in the same order. A walk's summary is then the compiled one's (tests/test_compiled.py);
+a headless tick takes about 7 times the CPU (docs/DESIGN.md, "The compiled layer").
 
 - numba compiles a kernel to machine code at its first call and caches it in the module's
   ``__pycache__``: a fresh checkout compiles once, later processes load the cache.
