@@ -260,6 +260,7 @@ def simulate_config(args: argparse.Namespace) -> RunConfig:
 
 def _simulate(args: argparse.Namespace) -> int:
     from app.runs import run, summarize
+    from app.sim.summary import unsuccessful_text
 
     try:
         cfg = simulate_config(args)
@@ -274,7 +275,7 @@ def _simulate(args: argparse.Namespace) -> int:
         recorder = HeadlessRecorder(params.method)
     session = run(cfg, on_tick=recorder.capture if recorder else None)
     summary = summarize(session)
-    ok = "success" if summary["success"] else ("FELL" if summary["fell"] else "incomplete")
+    ok = "success" if summary["success"] else ("FELL" if summary["fell"] else "NO SUCCESS")
     le = summary["landing_error_max"]
     print(
         f"{summary['method']} step {summary['step_length']:.3f} m x {summary['steps_planned']}: "
@@ -293,6 +294,9 @@ def _simulate(args: argparse.Namespace) -> int:
         )
     if summary["fell"]:
         print(f"fell at {summary['fall_time']:.2f} s: {summary['fall_reason']}")
+    if summary["unsuccessful"]:
+        why = unsuccessful_text(summary["unsuccessful"], le, summary["solver_failure_share"])
+        print(f"not a success: {why}")
     if args.json:
         args.json.write_text(json.dumps(summary, indent=2))
     if args.csv:

@@ -41,12 +41,12 @@ def test_log3():
         )
 
 
-@pytest.mark.parametrize("method", ["fixed", "mpc", "redundancy"])
-def test_zero_when_on_target(method):
+@pytest.mark.parametrize("waist_rate", [0.0, None])  # pinned (fixed, mpc) or free
+def test_zero_when_on_target(waist_rate):
     T_l, T_r = _pose(np.eye(3), [0, 0.1, -0.7]), _pose(_rot([0, 0, 1], 0.1), [0.1, -0.1, -0.7])
     v = foot_velocity_command(T_l, T_l, np.zeros(6), T_r, T_r, np.zeros(6), 20.0)
     assert np.allclose(v, 0.0)
-    qp = build_ik(_J(), v, np.zeros(13), QMIN, QMAX, IkParams(), DT, method, waist_rate=0.0)
+    qp = build_ik(_J(), v, np.zeros(13), QMIN, QMAX, IkParams(), DT, waist_rate)
     qd, ok = solve_ik(qp, QpSolver("osqp"))
     assert ok and np.max(np.abs(qd)) < 1e-6
 
@@ -66,25 +66,23 @@ def test_reproduces_feasible_target(backend):
     qd_true[WAIST] = 0.0
     v = J @ qd_true
     p = IkParams(damping=1e-8)
-    qp = build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, "fixed")
+    qp = build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, 0.0)
     qd, ok = solve_ik(qp, QpSolver(backend))
     assert ok
     assert np.linalg.norm(J @ qd - v) < 1e-4 * np.linalg.norm(v)
 
 
-def test_mpc_waist_rate_pinned_and_clipped():
+def test_waist_rate_pinned_and_clipped():
     J, v = _J(4), np.random.default_rng(5).normal(size=12) * 0.1
-    qp = build_ik(J, v, np.zeros(13), QMIN, QMAX, IkParams(), DT, "mpc", waist_rate=0.7)
+    qp = build_ik(J, v, np.zeros(13), QMIN, QMAX, IkParams(), DT, 0.7)
     qd, ok = solve_ik(qp, QpSolver("osqp"))
     assert ok and abs(qd[WAIST] - 0.7) < 1e-7
     # Near the waist limit: the pinned rate is clipped into the joint-limit bound.
     q = np.zeros(13)
     q[WAIST] = 2.0 - 0.001
-    qp = build_ik(J, v, q, QMIN, QMAX, IkParams(), DT, "mpc", waist_rate=5.0)
+    qp = build_ik(J, v, q, QMIN, QMAX, IkParams(), DT, 5.0)
     qd, ok = solve_ik(qp, QpSolver("osqp"))
     assert ok and abs(qd[WAIST] - 0.001 / DT) < 1e-6
-    with pytest.raises(ValueError):
-        build_ik(J, v, q, QMIN, QMAX, IkParams(), DT, "mpc")
 
 
 def test_joint_limits_respected():
@@ -92,7 +90,7 @@ def test_joint_limits_respected():
     v = np.random.default_rng(7).normal(size=12) * 50.0  # far too fast
     q = np.random.default_rng(8).uniform(-1.99, 1.99, 13)
     p = IkParams()
-    qp = build_ik(J, v, q, QMIN, QMAX, p, DT, "redundancy")
+    qp = build_ik(J, v, q, QMIN, QMAX, p, DT, None)
     qd, ok = solve_ik(qp, QpSolver("osqp"))
     assert ok
     q_next = q + DT * qd
@@ -100,15 +98,15 @@ def test_joint_limits_respected():
     assert np.all(np.abs(qd) <= p.joint_speed_limit + 1e-6)
 
 
-@pytest.mark.parametrize("method", ["fixed", "mpc", "redundancy"])
-def test_osqp_matches_exact(method):
+@pytest.mark.parametrize("waist_rate", [0.0, 0.3, None])
+def test_osqp_matches_exact(waist_rate):
     rng = np.random.default_rng(9)
     solver = QpSolver("osqp")
     for _ in range(5):
         J = rng.normal(size=(12, 13))
         v = rng.normal(size=12) * 5.0
         q = rng.uniform(-1.9, 1.9, 13)
-        qp = build_ik(J, v, q, QMIN, QMAX, IkParams(), DT, method, waist_rate=0.3)
+        qp = build_ik(J, v, q, QMIN, QMAX, IkParams(), DT, waist_rate)
         qd, ok = solve_ik(qp, solver)
         assert ok and np.max(np.abs(qd - solve_exact(qp))) < 1e-6
 
@@ -118,12 +116,8 @@ def test_redundancy_moves_waist_when_useful():
     J = _J(10)
     v = J[:, WAIST] * 1.0  # exactly the waist's own motion
     p = IkParams(damping=1e-3)
-    qd_fixed, _ = solve_ik(
-        build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, "fixed"), QpSolver("daqp")
-    )
-    qd_red, ok = solve_ik(
-        build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, "redundancy"), QpSolver("daqp")
-    )
+    qd_fixed, _ = solve_ik(build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, 0.0), QpSolver("daqp"))
+    qd_red, ok = solve_ik(build_ik(J, v, np.zeros(13), QMIN, QMAX, p, DT, None), QpSolver("daqp"))
     assert ok and abs(qd_fixed[WAIST]) < 1e-12
     assert qd_red[WAIST] > 0.5
     assert np.sum(qd_red**2) < np.sum(qd_fixed**2)
@@ -135,7 +129,7 @@ def test_redundancy_pulls_waist_to_zero_in_null_space():
     q = np.zeros(13)
     q[WAIST] = 0.3
     qd, ok = solve_ik(
-        build_ik(J, np.zeros(12), q, QMIN, QMAX, IkParams(), DT, "redundancy"), QpSolver("daqp")
+        build_ik(J, np.zeros(12), q, QMIN, QMAX, IkParams(), DT, None), QpSolver("daqp")
     )
     assert ok and qd[WAIST] < 0.0
     assert np.linalg.norm(J @ qd) < 1e-3
