@@ -22,7 +22,7 @@ $(TEST_STAMP): $(STAMP)
 	$(BIN)/pip install -q -e '.[test,cluster]'
 	@touch $@
 
-# numba compiles the control tick's kernels (controller/jit.py) at their first call and keeps
+# numba compiles the control tick's kernels (controller/compiled.py) at their first call and keeps
 # them in __pycache__: one short walk compiles them once (about 15 s of CPU) rather than every
 # test or worker process that happens to start first; a changed kernel module compiles again.
 KERNELS := $(VENV)/.kernels

@@ -331,6 +331,7 @@ def simulate_method(args: argparse.Namespace) -> str:
 
 def _simulate(args: argparse.Namespace) -> int:
     from app.runs import run, summarize
+    from app.sim.summary import unsuccessful_text
 
     try:
         cfg = simulate_config(args)
@@ -352,7 +353,7 @@ def _simulate(args: argparse.Namespace) -> int:
         if summary["fell"]
         else "STOPPED by its strategy"
         if summary["strategy_error"]
-        else "incomplete"
+        else "NO SUCCESS"
     )
     le = summary["landing_error_max"]
     landing = f"{le * 100:.1f} cm" if le is not None else "-"
@@ -373,6 +374,9 @@ def _simulate(args: argparse.Namespace) -> int:
         )
     if summary["fell"]:
         print(f"fell at {summary['fall_time']:.2f} s: {summary['fall_reason']}")
+    if summary["unsuccessful"]:
+        why = unsuccessful_text(summary["unsuccessful"], le, summary["solver_failure_share"])
+        print(f"not a success: {why}")
     if summary["strategy_error"]:
         print(f"stopped at t = {summary['strategy_error_time']:.3f} s: {summary['strategy_error']}")
     tick_ms = params.control_dt * 1e3

@@ -34,6 +34,8 @@ import math
 
 import numpy as np
 
+from controller.pelvis_reference import hip_points
+
 RULES = ("paper", "literal")
 
 
@@ -106,8 +108,8 @@ def hip_points_for_angle(theta_deg: float, l_pel: float) -> np.ndarray:
     Positive yaw (about +z) moves the left hip (at +y) backward: x_left = -l_pel/2 sin(theta),
     x_right = +l_pel/2 sin(theta) (eq. 2's Delta d_hip = x_right - x_left = l_pel sin theta).
     """
-    s = 0.5 * l_pel * math.sin(math.radians(theta_deg))
-    return np.array([-s, s])
+    hips = hip_points(np.zeros((1, 2)), np.array([math.radians(theta_deg)]), 0.5 * l_pel)
+    return hips[0, :, 0]
 
 
 def reachable_step(

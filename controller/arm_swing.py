@@ -27,22 +27,23 @@ from __future__ import annotations
 
 import numpy as np
 
+from controller.compiled import kernel
 from controller.ik import velocity_bounds
-from controller.jit import kernel
 from controller.params import ArmParams
 from controller.qp import QP, QpSolver, frozen
 
 
-def yaw_momentum(a_yaw: np.ndarray, q_dot: np.ndarray) -> float:
-    """Yaw angular momentum a_yaw . q_dot [kg m^2/s] (eq. 41 or 42)."""
-    return float(np.dot(np.asarray(a_yaw, dtype=float), np.asarray(q_dot, dtype=float)))
+@kernel
+def yaw_momentum(a_yaw, q_dot):
+    """Yaw angular momentum a_yaw . q_dot [kg m^2/s] (eq. 41 or 42) of float arrays."""
+    return np.dot(a_yaw, q_dot)
 
 
 @kernel
 def _arm_cost(a_low_yaw, q_dot_low, a, q, q_up_init, w1, w2, w3, dt):
     """P (n, n) and q (n,) of eq. (43): h_low = a_low . q_dot_low (eq. 41),
     P = omega1 a a' + (omega2 dt^2 + omega3) I, q = omega1 h_low a - omega2 dt (q_init - q)."""
-    h_low = np.dot(a_low_yaw, q_dot_low)
+    h_low = yaw_momentum(a_low_yaw, q_dot_low)
     r = q_up_init - q  # (n,) pose error [rad]
     n = a.shape[0]
     P = w1 * (a.reshape(n, 1) * a.reshape(1, n))  # omega1 a a'

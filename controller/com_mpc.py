@@ -43,8 +43,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from controller.compiled import kernel
 from controller.footsteps import FootstepPlan
-from controller.jit import kernel
 from controller.params import ComMpcParams, horizon_samples
 from controller.qp import QP, QpSolver, frozen
 
@@ -297,8 +297,3 @@ class ComMpc:
             x0,
             self._zmp_maps,
         )
-
-    def zmp_of(self, state: np.ndarray) -> np.ndarray:
-        """LIPM ZMP p - (z_c / g) a [m] of a (3, ...) state."""
-        s = np.asarray(state, dtype=float)
-        return s[0] - self.com_height / GRAVITY * s[2]

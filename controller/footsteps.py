@@ -63,6 +63,7 @@ Choices where the paper is vague:
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from functools import cached_property
 from operator import itemgetter
@@ -70,21 +71,12 @@ from typing import NamedTuple
 
 import numpy as np
 
-from controller.jit import kernel
+from controller.compiled import kernel
 from controller.params import WalkParams
 from models.dyros_jet import FOOT_SIZE
 
 LEFT, RIGHT = 0, 1
 FINAL_STAND = 1.0  # [s] stand after the ZMP reached the final midpoint
-
-# The per-step table :meth:`FootstepPlan.sample` reads (one row per step, the columns below),
-# so the sampler's kernel finds all of a step in one row.
-_START, _DSP, _DSP_POS, _SSP, _HEIGHT, _SIDE = range(6)  # [s], [s], [s] (> 0), [s] (> 0), [m]
-_FROM_0, _TO_0, _SUPPORT_0 = 6, 9, 12  # the first of 3 columns each: lift-off point, foothold,
-# support foot [m]
-_ZMP_FROM_0 = 15  # the first of 2 columns: the ZMP reference at the step's start [m]
-_DSP_END_POS = 17  # [s] (> 0) the DSP after the touch-down (both_ends)
-_COLUMNS = 18
 
 
 class PlanSample(NamedTuple):
@@ -116,6 +108,29 @@ class PlanSample(NamedTuple):
         """(N, 2) bool, [left, right] on the ground according to the plan."""
         in_air = self.in_ssp[:, None] & (self.swing_side[:, None] == np.array([LEFT, RIGHT]))
         return ~in_air
+
+
+class PlanSteps(NamedTuple):
+    """The plan as :meth:`FootstepPlan.sample` reads it: one row per step, and how the walk
+    ends (:attr:`FootstepPlan.steps`)."""
+
+    start: np.ndarray  # (n,) [s] start of each step
+    dsp: np.ndarray  # (n,) [s] DSP before the lift-off
+    ssp: np.ndarray  # (n,) [s] SSP, at least 1e-9
+    dsp_end: np.ndarray  # (n,) [s] DSP after the touch-down
+    height: np.ndarray  # (n,) [m] swing-foot lift
+    swing_side: np.ndarray  # (n,) int, LEFT / RIGHT
+    swing_from: np.ndarray  # (n, 3) [m] lift-off point
+    swing_to: np.ndarray  # (n, 3) [m] foothold
+    support: np.ndarray  # (n, 3) [m] support foot
+    zmp_from: np.ndarray  # (n, 2) [m] ZMP reference at the step's start
+    t_end: float  # [s] end of the final stand
+    walk_end: float  # [s] end of the closing step
+    feet_init: np.ndarray  # (2, 3) [m] left, right before the first step
+    feet_final: np.ndarray  # (2, 3) [m] left, right after the last step
+    zmp_at_walk_end: np.ndarray  # (2,) [m] the ZMP reference when the closing step ends
+    final_dsp: float  # [s] the ZMP's shift to the final midpoint, at least 1e-9
+    has_end_dsp: bool  # some step has a DSP after its touch-down
 
 
 @dataclass(frozen=True)
@@ -180,26 +195,28 @@ class FootstepPlan:
 
     # -- the sampler ----------------------------------------------------------------------
     @cached_property
-    def _table(self) -> np.ndarray:
-        """(n, 18) per-step columns read by :meth:`sample` (see the ``_START`` .. constants)."""
+    def steps(self) -> PlanSteps:
+        """The plan as the sampler reads it: the per-step arrays and how the walk ends."""
         dsp, dsp_end = self.step_dsp, self.step_dsp_end
-        table = np.column_stack(
-            [
-                self.step_start,
-                dsp,
-                np.maximum(dsp, 1e-9),
-                np.maximum(self.step_duration - dsp - dsp_end, 1e-9),
-                self.step_height,
-                self.swing_side.astype(float),
-                self.swing_from,
-                self.swing_to,
-                self.support_pos,
-                self.zmp_from[:, :2],
-                np.maximum(dsp_end, 1e-9),
-            ]
+        return PlanSteps(
+            start=self.step_start,
+            dsp=dsp,
+            ssp=np.maximum(self.step_duration - dsp - dsp_end, 1e-9),
+            dsp_end=dsp_end,
+            height=self.step_height,
+            swing_side=self.swing_side,
+            swing_from=self.swing_from,
+            swing_to=self.swing_to,
+            support=self.support_pos,
+            zmp_from=np.ascontiguousarray(self.zmp_from[:, :2]),
+            t_end=self.t_end,
+            walk_end=self.walk_end,
+            feet_init=self.feet_init,
+            feet_final=self.feet_final,
+            zmp_at_walk_end=self.zmp_at_walk_end,
+            final_dsp=max(self.final_dsp_time, 1e-9),
+            has_end_dsp=self.has_end_dsp,
         )
-        assert table.shape[1] == _COLUMNS
-        return table
 
     def sample(self, times: float | np.ndarray, margin: float = 0.0) -> PlanSample:
         """The plan at ``times`` [s] (scalar or (N,)): phase, ZMP reference and box, feet.
@@ -212,21 +229,7 @@ class FootstepPlan:
             margin: [m] distance the ZMP box keeps from the foot edges (eq. 18 bounds).
         """
         half = np.maximum(np.array(FOOT_SIZE) / 2.0 - margin, 0.0)
-        return PlanSample._make(
-            _sample(
-                np.atleast_1d(np.asarray(times, dtype=float)),
-                self.t_end,
-                self.step_start,
-                self.walk_end,
-                self._table,
-                self.has_end_dsp,
-                self.feet_init,
-                self.feet_final,
-                self.zmp_at_walk_end,
-                max(self.final_dsp_time, 1e-9),
-                half,
-            )
-        )
+        return _sample(np.atleast_1d(np.asarray(times, dtype=float)), self.steps, half)
 
     @cached_property
     def has_end_dsp(self) -> bool:
@@ -236,10 +239,7 @@ class FootstepPlan:
     @cached_property
     def zmp_at_walk_end(self) -> np.ndarray:
         """(2,) [m] the ZMP reference when the closing step ends."""
-        support = self.support_pos[-1, :2]
-        if self.step_dsp_end[-1] > 0.0:
-            return 0.5 * (support + self.swing_to[-1, :2])
-        return support.copy()
+        return _zmp_at_step_end(self.support_pos[-1], self.swing_to[-1], self.step_dsp_end[-1])
 
     # -- replanning -----------------------------------------------------------------------
     def replanned(self, walk: WalkParams, t_now: float) -> FootstepPlan:
@@ -264,16 +264,16 @@ class FootstepPlan:
         steps = _Steps()
         for j in range(started):
             steps.add(
-                float(self.step_start[j]),
-                float(self.step_duration[j]),
-                float(self.step_dsp[j]),
-                float(self.step_height[j]),
-                int(self.swing_side[j]),
-                self.swing_from[j],
-                self.swing_to[j],
-                self.support_pos[j],
-                self.zmp_from[j],
-                float(self.step_dsp_end[j]),
+                start=float(self.step_start[j]),
+                duration=float(self.step_duration[j]),
+                dsp=float(self.step_dsp[j]),
+                height=float(self.step_height[j]),
+                side=int(self.swing_side[j]),
+                frm=self.swing_from[j],
+                to=self.swing_to[j],
+                support=self.support_pos[j],
+                zmp_from=self.zmp_from[j],
+                dsp_end=float(self.step_dsp_end[j]),
             )
         feet = self.feet_init.copy()
         for j in range(started):
@@ -300,9 +300,9 @@ def _swing_point(s, p0, p1, height, ssp, p, v):
         dp = p1[a] - p0[a]
         p[a] = p0[a] + dp * blend
         v[a] = dp * dblend
-    two_pi_s = 2.0 * np.pi * s  # the lift: h (1 - cos(2 pi s)) / 2, peak h at s = 0.5
-    p[2] = p[2] + height * (1.0 - np.cos(two_pi_s)) / 2.0
-    v[2] = v[2] + height * np.pi * np.sin(two_pi_s) / ssp
+    two_pi_s = 2.0 * math.pi * s  # the lift: h (1 - cos(2 pi s)) / 2, peak h at s = 0.5
+    p[2] = p[2] + height * (1.0 - math.cos(two_pi_s)) / 2.0
+    v[2] = v[2] + height * math.pi * math.sin(two_pi_s) / ssp
 
 
 @kernel
@@ -315,13 +315,13 @@ def _clamp(x, lo, hi):
 
 
 @kernel
-def _sample(times, t_end, step_start, walk_end, table, has_end_dsp, init, final, zmp_end,
-            final_dsp, half):  # fmt: skip
-    """The arrays of :class:`PlanSample` at ``times`` (:meth:`FootstepPlan.sample`), one
-    time after the other: the step in progress (a binary search of the step starts), its
-    row of the plan's table, the phase, the feet of eq. (20)-(21) and the ZMP reference and
-    box of eq. (18)."""
-    N, n = times.shape[0], step_start.shape[0]
+def _sample(times, plan, half):
+    """:meth:`FootstepPlan.sample` at ``times`` of the plan's :class:`PlanSteps`, one time
+    after the other: the step in progress (a binary search of the step starts), its phase,
+    the feet of eq. (20)-(21) and the ZMP reference and box of eq. (18) (``half``: (2,) [m]
+    the foot's half size less the margin)."""
+    N, n = times.shape[0], plan.start.shape[0]
+    feet_init, feet_final = plan.feet_init, plan.feet_final
     t_out = np.empty(N)
     step = np.empty(N, np.int64)
     standing = np.empty(N, np.bool_)
@@ -335,49 +335,49 @@ def _sample(times, t_end, step_start, walk_end, table, has_end_dsp, init, final,
     p_right, v_right = np.empty((N, 3)), np.empty((N, 3))
     p_sw, v_sw = np.empty(3), np.empty(3)
     for i in range(N):
-        t = _clamp(times[i], 0.0, t_end)
-        idx = np.searchsorted(step_start, t, side="right") - 1
-        after = t >= walk_end
+        t = _clamp(times[i], 0.0, plan.t_end)
+        idx = np.searchsorted(plan.start, t, side="right") - 1
+        after = t >= plan.walk_end
         if after:
             idx = n
         before = idx < 0
-        row = table[min(max(idx, 0), n - 1)]
-        dsp, ssp, side = row[_DSP], row[_SSP], int(row[_SIDE])
-        tau = t - row[_START]  # [s] into the step
+        k = min(max(idx, 0), n - 1)  # the step whose row is read
+        dsp, ssp, side = plan.dsp[k], plan.ssp[k], plan.swing_side[k]
+        support, frm, to = plan.support[k], plan.swing_from[k], plan.swing_to[k]
+        tau = t - plan.start[k]  # [s] into the step
         walking = not (before or after)
         ssp_now = walking and tau >= dsp and tau < dsp + ssp
         s = 0.0 if before else (1.0 if after else _clamp((tau - dsp) / ssp, 0.0, 1.0))
         # eq. (20)-(21): the support foot stays, the swing foot follows the curve of swing
-        p0, p1 = row[_FROM_0 : _FROM_0 + 3], row[_TO_0 : _TO_0 + 3]
-        _swing_point(s, p0, p1, row[_HEIGHT], ssp, p_sw, v_sw)
+        _swing_point(s, frm, to, plan.height[k], ssp, p_sw, v_sw)
         for a in range(3):
             if before:
-                p_left[i, a], p_right[i, a] = init[LEFT, a], init[RIGHT, a]
+                p_left[i, a], p_right[i, a] = feet_init[LEFT, a], feet_init[RIGHT, a]
             elif after:
-                p_left[i, a], p_right[i, a] = final[LEFT, a], final[RIGHT, a]
+                p_left[i, a], p_right[i, a] = feet_final[LEFT, a], feet_final[RIGHT, a]
             else:
-                p_left[i, a] = p_sw[a] if side == LEFT else row[_SUPPORT_0 + a]
-                p_right[i, a] = p_sw[a] if side == RIGHT else row[_SUPPORT_0 + a]
+                p_left[i, a] = p_sw[a] if side == LEFT else support[a]
+                p_right[i, a] = p_sw[a] if side == RIGHT else support[a]
             v_left[i, a] = v_sw[a] if walking and side == LEFT else 0.0
             v_right[i, a] = v_sw[a] if walking and side == RIGHT else 0.0
         # ZMP reference: from the previous support to this one in the DSP, then on it (eq. 18)
-        s_dsp = _clamp(tau / row[_DSP_POS], 0.0, 1.0)
-        s_end = _clamp((tau - dsp - ssp) / row[_DSP_END_POS], 0.0, 1.0)
-        s_final = _clamp((t - walk_end) / final_dsp, 0.0, 1.0)
+        s_dsp = _clamp(tau / max(dsp, 1e-9), 0.0, 1.0)
+        s_end = _clamp((tau - dsp - ssp) / max(plan.dsp_end[k], 1e-9), 0.0, 1.0)
+        s_final = _clamp((t - plan.walk_end) / plan.final_dsp, 0.0, 1.0)
         for a in range(2):
-            z0, sup = row[_ZMP_FROM_0 + a], row[_SUPPORT_0 + a]
-            ref = z0 + s_dsp * (sup - z0)
-            if has_end_dsp:  # then on to the midpoint of the support and the landed foot
-                ref = ref + s_end * 0.5 * (row[_TO_0 + a] - sup)
+            z0 = plan.zmp_from[k, a]
+            ref = z0 + s_dsp * (support[a] - z0)
+            if plan.has_end_dsp:  # then on to the midpoint of the support and the landed foot
+                ref = ref + s_end * 0.5 * (to[a] - support[a])
             if before:  # the feet's midpoint
-                ref = (init[LEFT, a] + init[RIGHT, a]) / 2.0
+                ref = (feet_init[LEFT, a] + feet_init[RIGHT, a]) / 2.0
             elif after:  # after the closing step: on to the feet's midpoint, then stay
-                mid = (final[LEFT, a] + final[RIGHT, a]) / 2.0
-                ref = zmp_end[a] + s_final * (mid - zmp_end[a])
+                mid = (feet_final[LEFT, a] + feet_final[RIGHT, a]) / 2.0
+                ref = plan.zmp_at_walk_end[a] + s_final * (mid - plan.zmp_at_walk_end[a])
             zmp_ref[i, a] = ref
             # ZMP box: both feet's bounding box, or the support foot alone in the SSP
-            lo_a = sup if ssp_now else p_left[i, a]
-            hi_a = sup if ssp_now else p_right[i, a]
+            lo_a = support[a] if ssp_now else p_left[i, a]
+            hi_a = support[a] if ssp_now else p_right[i, a]
             if hi_a < lo_a:
                 lo_a, hi_a = hi_a, lo_a
             zmp_lo[i, a] = lo_a - half[a]
@@ -386,8 +386,12 @@ def _sample(times, t_end, step_start, walk_end, table, has_end_dsp, init, final,
         in_dsp[i], in_ssp[i], s_ssp[i] = walking and not ssp_now, ssp_now, s
         swing_side[i] = side if walking else -1
         support_side[i] = 1 - side
-    return (t_out, step, standing, in_dsp, in_ssp, swing_side, support_side, s_ssp, zmp_ref,
-            zmp_lo, zmp_hi, p_left, v_left, p_right, v_right)  # fmt: skip
+    return PlanSample(
+        t=t_out, step=step, standing=standing, in_dsp=in_dsp, in_ssp=in_ssp,
+        swing_side=swing_side, support_side=support_side, s_ssp=s_ssp, zmp_ref=zmp_ref,
+        zmp_lo=zmp_lo, zmp_hi=zmp_hi, p_left=p_left, v_left=v_left, p_right=p_right,
+        v_right=v_right,
+    )  # fmt: skip
 
 
 TICK_BLOCK = 100  # ticks a :class:`TickSamples` covers (0.5 s at 200 Hz)
@@ -473,25 +477,27 @@ class _Steps:
     def __init__(self) -> None:
         self.rows: list[_Step] = []
 
-    def add(self, start, duration, dsp, height, side, frm, to, support, zmp_from, dsp_end) -> None:
+    def add(self, *, frm, to, support, zmp_from, **scalars) -> None:
+        """One step: the points as float arrays, the rest as given (:class:`_Step`)."""
         self.rows.append(
             _Step(
-                start,
-                duration,
-                dsp,
-                height,
-                side,
-                np.array(frm, float),
-                np.array(to, float),
-                np.array(support, float),
-                np.array(zmp_from, float)[:2],
-                dsp_end,
+                frm=np.array(frm, float),
+                to=np.array(to, float),
+                support=np.array(support, float),
+                zmp_from=np.array(zmp_from, float)[:2],
+                **scalars,
             )
         )
 
     def column(self, name: str, dtype: type = float) -> np.ndarray:
         """One field of every step, stacked ((n,) or (n, k))."""
         return np.array([getattr(r, name) for r in self.rows], dtype=dtype)
+
+
+def _zmp_at_step_end(support: np.ndarray, to: np.ndarray, dsp_end: float) -> np.ndarray:
+    """(2,) [m] where a step leaves the ZMP reference: on its support foot, or, with a DSP
+    after the touch-down, at the midpoint of the support and the landed foot."""
+    return support[:2] + (0.5 * (to[:2] - support[:2]) if dsp_end > 0 else 0.0)
 
 
 def _finish(
@@ -518,10 +524,7 @@ def _finish(
         last = steps.rows[-1]
         t = last.start + last.duration
         swing = 1 - last.side
-        # the ZMP where the last step left it: its support foot, or on to the landed foot
-        zmp_prev = last.support[:2] + (
-            0.5 * (last.to[:2] - last.support[:2]) if last.dsp_end > 0 else 0.0
-        )
+        zmp_prev = _zmp_at_step_end(last.support, last.to, last.dsp_end)
     else:
         t = t_start
         swing = first_swing
@@ -535,19 +538,19 @@ def _finish(
         else:  # closing step: alongside the last foothold
             to = np.array([support[0], y, 0.0])
         steps.add(
-            t,
-            walk.step_time,
-            dsp_start,
-            walk.foot_height,
-            swing,
-            feet[swing],
-            to,
-            support,
-            zmp_prev,
-            dsp_end,
+            start=t,
+            duration=walk.step_time,
+            dsp=dsp_start,
+            height=walk.foot_height,
+            side=swing,
+            frm=feet[swing],
+            to=to,
+            support=support,
+            zmp_from=zmp_prev,
+            dsp_end=dsp_end,
         )
         feet[swing] = to
-        zmp_prev = support[:2] + (0.5 * (to[:2] - support[:2]) if dsp_end > 0 else 0.0)
+        zmp_prev = _zmp_at_step_end(support, to, dsp_end)
         t += walk.step_time
         swing = 1 - swing
     final_dsp = dsp

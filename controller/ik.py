@@ -5,7 +5,7 @@ right leg (6)] (eq. 6), the order of ``LOWER_JOINTS``. The QP is
 
     min  1/2 ||J_low q_dot - v_des||^2 + damping/2 ||q_dot||^2 (+ redundancy term)     (39)
     s.t. max((q_min - q)/dt, -v_max) <= q_dot <= min((q_max - q)/dt, v_max)
-         waist row: pinned to a rate, or free (the pelvis strategy's choice)
+         waist row: pinned at a rate or free (below)
 
 and the caller sets q_des = q + dt q_dot (eq. 40).
 
@@ -16,16 +16,16 @@ Paper symbols -> code names:
     q_low,cur -> ``q_low``; q_low,min/max -> ``q_min``/``q_max``; Delta t -> ``dt``;
     q_dot_low,min/max -> +-``params.joint_speed_limit``; theta_dot_{i+1} -> ``waist_rate``.
 
-The waist row is what the pelvis strategy of the tick asked for (``controller.strategy``;
-docs/DESIGN.md, "The three methods"):
-- a rate (``waist_rate`` a float): l = u = ``waist_rate``, **clipped into the waist's
-  joint-limit / speed bounds** so the QP always stays feasible. The fixed pelvis pins 0; the
-  paper's method pins the pelvic MPC's theta_dot_{i+1} (the MPC already keeps the angle
-  within +-45 deg, inside the joint range; the clip only matters if the two limits disagree).
-- free (``waist_rate`` None; redundancy, ref. [21]): the motion comes from the redundancy (the
-  damping term spreads joint motion onto the waist when that reduces the legs' velocities,
-  i.e. during the swing) and a regularisation pulls the waist toward 0 using the current state
-  only (no prediction):
+The waist row is data, ``waist_rate``: what the tick's pelvis strategy asked for
+(``controller.strategy``; docs/DESIGN.md, "The three methods"):
+- a rate [rad/s]: the waist row l = u = that rate, **clipped into the waist's joint-limit /
+  speed bounds** so the QP always stays feasible. Method ``mpc`` pins the pelvic MPC's
+  theta_dot_{i+1} (the MPC already keeps the angle within +-45 deg, inside the joint range;
+  the clip only matters if the two limits disagree), method ``fixed`` pins 0.
+- ``None``: the waist is free (method ``redundancy``, ref. [21]); the motion comes from the
+  redundancy (the damping term spreads joint motion onto the waist when that reduces the
+  legs' velocities, i.e. during the swing) and a regularisation pulls the waist toward 0
+  using the current state only (no prediction):
 
       redundancy_weight/2 * (q_waist + dt q_dot_waist)^2        [rad^2]
 
@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from controller.jit import kernel
+from controller.compiled import kernel
 from controller.params import IkParams
 from controller.qp import QP, QpSolver, frozen
 
@@ -72,23 +72,23 @@ def velocity_bounds(q, q_min, q_max, dt, speed_limit):
 
 
 @kernel
-def _ik_qp(P, J, v, q, q_min, q_max, damping, dt, speed_limit, pinned, waist_rate, weight):
-    """P (13, 13) (J'J on entry, in place), c (13,), lo, hi (13,) of eq. (39) with the waist
-    pinned to ``waist_rate`` or free (:func:`build_ik`)."""
+def _ik_qp(P, J, v, q, q_min, q_max, dt, speed_limit, damping, waist_rate, weight):
+    """Eq. (39) on J'J (``P`` on entry, in place): P = J'J + damping I, c = -J'v, the bounds
+    lo <= q_dot <= hi, and the waist row (:func:`build_ik`)."""
     for i in range(P.shape[0]):
         P[i, i] += damping  # + damping I
     c = -(J.T @ v)  # (13,)
     lo, hi = velocity_bounds(q, q_min, q_max, dt, speed_limit)
-    if pinned:  # the waist at the strategy's rate, clipped into its bounds
+    if waist_rate is None:  # free: w/2 (q_w + dt qd_w)^2 = w dt^2/2 qd_w^2 + w dt q_w qd_w + ..
+        P[WAIST, WAIST] += weight * dt * dt
+        c[WAIST] += weight * dt * q[WAIST]
+    else:  # pinned at the rate, clipped into the waist's bounds
         w = waist_rate
         if lo[WAIST] > w:
             w = lo[WAIST]
         if hi[WAIST] < w:
             w = hi[WAIST]
         lo[WAIST] = hi[WAIST] = w
-    else:  # free: w/2 (q_w + dt qd_w)^2 = w dt^2/2 qd_w^2 + w dt q_w qd_w + const
-        P[WAIST, WAIST] += weight * dt * dt
-        c[WAIST] += weight * dt * q[WAIST]
     return P, c, lo, hi
 
 
@@ -111,8 +111,9 @@ def build_ik(
         q_min, q_max: (13,) joint limits [rad].
         params: ``damping``, ``joint_speed_limit``, ``redundancy_weight``.
         dt: control period [s].
-        waist_rate: the waist yaw rate [rad/s] to pin (clipped into its bounds), or None to
-            leave the waist free, pulled toward 0 by ``redundancy_weight``.
+        waist_rate: [rad/s] the waist's rate the strategy asked for, pinned (clipped into
+            its bounds): the pelvic MPC's theta_dot_{i+1}, or 0 for a fixed pelvis; None
+            leaves the waist free with the redundancy regularisation (module docstring).
 
     Returns:
         QP with variable q_dot (13,), A = identity (13 bound rows).
@@ -127,11 +128,10 @@ def build_ik(
         np.asarray(q_low, dtype=float),
         np.asarray(q_min, dtype=float),
         np.asarray(q_max, dtype=float),
-        params.damping,
         dt,
         params.joint_speed_limit,
-        waist_rate is not None,
-        0.0 if waist_rate is None else float(waist_rate),
+        params.damping,
+        None if waist_rate is None else float(waist_rate),
         params.redundancy_weight,
     )
     return QP(P, c, BOUND_ROWS, lo, hi)

@@ -33,7 +33,7 @@ from typing import NamedTuple
 import numpy as np
 import pinocchio as pin
 
-from controller.jit import kernel
+from controller.compiled import gram_extremes, kernel
 from models.dyros_jet import (
     ARM_QP_JOINTS,
     FOOT_SITES,
@@ -185,9 +185,9 @@ class RobotKinematics:
 
 
 def condition_number(J: np.ndarray) -> float:
-    """kappa(J) = sigma_max / sigma_min by SVD (eq. 45); inf if J is (numerically) singular."""
-    s = np.linalg.svd(np.asarray(J, dtype=float), compute_uv=False)
-    return float("inf") if s.size == 0 else _kappa(s[0], s[-1])
+    """kappa(J) = sigma_max / sigma_min (eq. 45) of a J (m, n) with m <= n, inf when J is
+    (numerically) singular (:func:`jacobian_conditions`)."""
+    return jacobian_conditions(J)[0]
 
 
 def jacobian_conditions(J_low: np.ndarray) -> tuple[float, float]:
@@ -197,119 +197,17 @@ def jacobian_conditions(J_low: np.ndarray) -> tuple[float, float]:
     resolved up to about 1e7, far above the 1e3 that marks a straight knee). With L the leg
     columns and w the waist column, J J' = L L' + w w'.
     """
-    return _conditions(np.asarray(J_low, dtype=float), _EPS)
+    lam_min, lam_max, legs_min, legs_max = gram_extremes(np.asarray(J_low, dtype=float))
+    return _kappa(lam_max, lam_min), _kappa(legs_max, legs_min)
 
 
-@kernel
-def _conditions(J, eps):
-    """(kappa(J), kappa(J's columns 1..)) = sqrt(lambda_max / lambda_min) of their Gram
-    matrices J J' = L L' + w w' and L L' (w: column 0, L: the rest)."""
-    m, n = J.shape
-    legs = np.empty((m, m))
-    full = np.empty((m, m))
-    for i in range(m):
-        for j in range(i + 1):
-            g = 0.0
-            for c in range(1, n):
-                g += J[i, c] * J[j, c]
-            legs[i, j] = legs[j, i] = g
-            full[i, j] = full[j, i] = g + J[i, 0] * J[j, 0]
-    out = np.empty(2)
-    for k in range(2):
-        lam_min, lam_max = extreme_eigenvalues(full if k == 0 else legs)
-        s_max, s_min = math.sqrt(max(lam_max, 0.0)), math.sqrt(max(lam_min, 0.0))
-        out[k] = np.inf if s_max == 0.0 or s_min <= s_max * eps else s_max / s_min
-    return out[0], out[1]
-
-
-@kernel
-def extreme_eigenvalues(A):
-    """(smallest, largest) eigenvalue of the symmetric matrix A (n, n).
-
-    A Householder reduction to a tridiagonal T, then implicit QR steps with the Wilkinson
-    shift (Golub & Van Loan, Matrix Computations, 8.3), LAPACK's algorithm for all the
-    eigenvalues of a small matrix, as accurate (a few eps ||A||) and several times cheaper at
-    12 x 12, where dsyevd's cost is its per-call overhead (docs/PERFORMANCE.md).
-    """
-    n = A.shape[0]
-    T = A.copy()
-    v = np.empty(n)
-    p = np.empty(n)
-    for k in range(n - 2):
-        # H = I - beta v v' zeroes column k below the subdiagonal: T <- H T H on the block
-        lo = k + 1
-        norm = 0.0
-        for i in range(lo, n):
-            norm += T[i, k] * T[i, k]
-        norm = math.sqrt(norm)
-        if norm == 0.0:
-            continue
-        alpha = -norm if T[lo, k] >= 0.0 else norm
-        for i in range(lo, n):
-            v[i] = T[i, k]
-        v[lo] -= alpha
-        vv = 0.0
-        for i in range(lo, n):
-            vv += v[i] * v[i]
-        beta = 2.0 / vv
-        pv = 0.0
-        for i in range(lo, n):  # p = beta T v
-            acc = 0.0
-            for j in range(lo, n):
-                acc += T[i, j] * v[j]
-            p[i] = beta * acc
-            pv += p[i] * v[i]
-        half = 0.5 * beta * pv
-        for i in range(lo, n):  # w = p - (beta / 2)(p'v) v, kept in p
-            p[i] -= half * v[i]
-        for i in range(lo, n):  # T - v w' - w v'
-            for j in range(lo, n):
-                T[i, j] -= v[i] * p[j] + p[i] * v[j]
-        T[lo, k] = alpha
-    # Implicit symmetric QR steps with the Wilkinson shift (Golub & Van Loan, 8.3.2-8.3.3) on
-    # the diagonal d and subdiagonal e (e[i] between rows i and i + 1): each step chases a
-    # Givens rotation G = [[c, s], [-s, c]] down the unreduced block [lo, hi] (T <- G' T G on
-    # rows and columns k, k + 1, the bulge z moving from (k + 1, k - 1) to (k + 2, k)); a
-    # subdiagonal below eps (|d_i| + |d_i+1|) is dropped and splits the problem.
-    d = np.empty(n)
-    e = np.zeros(n)
-    for i in range(n):
-        d[i] = T[i, i]
-        if i + 1 < n:
-            e[i] = T[i + 1, i]
-    eps = np.finfo(np.float64).eps
-    hi = n - 1
-    for _ in range(30 * n):
-        while hi > 0 and abs(e[hi - 1]) <= eps * (abs(d[hi - 1]) + abs(d[hi])):
-            hi -= 1
-        if hi == 0:
-            break
-        lo = hi - 1
-        while lo > 0 and abs(e[lo - 1]) > eps * (abs(d[lo - 1]) + abs(d[lo])):
-            lo -= 1
-        half = 0.5 * (d[hi - 1] - d[hi])
-        b = e[hi - 1]
-        mu = d[hi] - b * b / (half + math.copysign(math.sqrt(half * half + b * b), half))
-        x, z = d[lo] - mu, e[lo]
-        for k in range(lo, hi):
-            r = math.sqrt(x * x + z * z)
-            c, sn = (x / r, -z / r) if r > 0.0 else (1.0, 0.0)  # G' [x; z] = [r; 0]
-            if k > lo:
-                e[k - 1] = r
-            a0, a1, bk = d[k], d[k + 1], e[k]
-            d[k] = c * c * a0 - 2.0 * c * sn * bk + sn * sn * a1
-            d[k + 1] = sn * sn * a0 + 2.0 * c * sn * bk + c * c * a1
-            e[k] = c * sn * (a0 - a1) + (c * c - sn * sn) * bk
-            if k + 1 < hi:
-                x, z = e[k], -sn * e[k + 1]
-                e[k + 1] *= c
-    return d.min(), d.max()
-
-
-def _kappa(s_max: float, s_min: float, floor: float = _EPS) -> float:
-    if s_max == 0.0 or s_min <= s_max * floor:
-        return float("inf")
-    return float(s_max / s_min)
+def _kappa(lam_max: float, lam_min: float) -> float:
+    """sigma_max / sigma_min from the extreme eigenvalues sigma^2; inf when sigma_min is
+    within machine precision of zero relative to sigma_max."""
+    s_max, s_min = math.sqrt(max(lam_max, 0.0)), math.sqrt(max(lam_min, 0.0))
+    if s_max == 0.0 or s_min <= s_max * _EPS:
+        return math.inf
+    return s_max / s_min
 
 
 def _as_slice(idx: np.ndarray) -> slice | np.ndarray:

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.jit import kernel
+from controller.compiled import kernel
 from controller.params import PelvisMpcParams
 from controller.qp import QP, QpSolver, frozen
 
@@ -72,11 +72,12 @@ class PelvisPlan:
 
 
 @kernel
-def _qp_vectors(ref, x0, PA_ang, alpha, bMtM, sM, angle_limit, acc_limit, acc_scale):
+def _qp_vectors(ref, x0, PA_ang, alpha, bMtM, sM, angle_limit, s_acc_limit):
     """The free response f = P_A,angle x0 (N,) of the state x0 = [theta, theta_dot] and the
     QP on Theta (module docstring) for the reference (N,): q = -alpha ref - beta M'M f (N,),
     l, u (2N,): the angle rows -angle_limit <= Theta <= angle_limit, the acceleration rows
-    s (-acc_limit + M f) <= s M Theta <= s (acc_limit + M f)."""
+    s (-acc_limit + M f) <= s M Theta <= s (acc_limit + M f) (``s_acc_limit`` = s acc_limit,
+    ``sM`` = s M, ``bMtM`` = beta M'M)."""
     n = ref.shape[0]
     free = PA_ang @ x0  # (N,) angles with zero input
     q = -alpha * ref - bMtM @ free
@@ -85,8 +86,8 @@ def _qp_vectors(ref, x0, PA_ang, alpha, bMtM, sM, angle_limit, acc_limit, acc_sc
     hi = np.empty(2 * n)
     lo[:n] = -angle_limit
     hi[:n] = angle_limit
-    lo[n:] = -acc_limit * acc_scale + mf
-    hi[n:] = acc_limit * acc_scale + mf
+    lo[n:] = -s_acc_limit + mf
+    hi[n:] = s_acc_limit + mf
     return free, q, lo, hi
 
 
@@ -156,6 +157,7 @@ class PelvisMpc:
         # Constant parts of the per-tick vectors (same arithmetic as written out in build).
         self._bMtM = b * self._MtM  # (N, N)
         self._sM = self._acc_scale * self._M  # (N, N)
+        self._s_acc_limit = params.acc_limit * self._acc_scale
         if shape_changed:
             self.solver.reset()
 
@@ -173,17 +175,15 @@ class PelvisMpc:
         n = self.n_samples
         if ref.shape[0] != n:
             raise ValueError(f"theta_ref has {ref.shape[0]} samples, the MPC has {n}")
-        p = self.params
         free, q, lo, hi = _qp_vectors(
             ref,
             x0,
             self._PA_ang,
-            p.alpha,
+            self.params.alpha,
             self._bMtM,
             self._sM,
             self._angle_limit,
-            p.acc_limit,
-            self._acc_scale,
+            self._s_acc_limit,
         )
         return free, QP(self._P, q, self._Acon, lo, hi)
 
@@ -195,12 +195,12 @@ class PelvisMpc:
         res = self.solver.solve(qp)
         if res.ok:
             angles = res.x  # the QP's variable (module docstring)
-            u, rates = _inputs_and_rates(angles, free, self._M, self._PA_rate, self._PB_rate, x0)
+        else:  # the brake's angles (eq. 35's angle rows)
+            angles = free + self._PB_ang @ self._brake(theta_dot)
+        u, rates = _inputs_and_rates(angles, free, self._M, self._PA_rate, self._PB_rate, x0)
+        if res.ok:
             u0 = float(u[0])
-        else:
-            u = self._brake(theta_dot)
-            angles = free + self._PB_ang @ u
-            rates = self._PA_rate @ x0 + self._PB_rate @ u
+        else:  # brake within this control period
             acc = self.params.acc_limit
             u0 = float(np.clip(-theta_dot / self.control_dt, -acc, acc))
         dt = self.control_dt
@@ -210,7 +210,11 @@ class PelvisMpc:
 
     def inputs_from_angles(self, angles: np.ndarray, theta: float, theta_dot: float) -> np.ndarray:
         """U (N,) [rad/s^2] that produces the predicted angles (N,) from [theta, theta_dot]."""
-        return self._M @ (np.asarray(angles, dtype=float) - self._PA_ang @ [theta, theta_dot])
+        x0 = np.array([theta, theta_dot], dtype=float)
+        free = self._PA_ang @ x0
+        return _inputs_and_rates(
+            np.asarray(angles, dtype=float), free, self._M, self._PA_rate, self._PB_rate, x0
+        )[0]
 
     def _brake(self, theta_dot: float) -> np.ndarray:
         """Inputs (N,) that bring the rate to 0 at the acceleration bound, then hold."""

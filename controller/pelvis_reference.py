@@ -49,9 +49,11 @@ Choices where the paper is vague (docs/DESIGN.md):
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from controller.jit import kernel
+from controller.compiled import kernel
 from controller.params import LATERAL_MODES
 
 HIP_HALF_WIDTH = 0.105  # [m] lateral distance from the pelvis centre to each hip joint
@@ -90,28 +92,38 @@ def lateral_distances(
             n,
         )
     elif mode == "predicted":
-        p_pelvis = np.atleast_2d(p_pelvis)
-        dy = np.column_stack(
-            [
-                np.atleast_2d(p_left)[:, 1] - p_pelvis[:, 1],
-                np.atleast_2d(p_right)[:, 1] - p_pelvis[:, 1],
-            ]
-        )
-    else:
-        raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
-    # the left foot lies at +y of the pelvis, the right at -y: keep each at least the floor
-    return np.stack([np.maximum(dy[..., 0], floor), np.minimum(dy[..., 1], -floor)], axis=-1)
+        return _predicted_lateral(_rows(p_pelvis), _rows(p_left), _rows(p_right), float(floor))
+    raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
+
+
+@kernel
+def _floored(left, right, floor):
+    """The left foot's lateral distance (at +y of the pelvis) at least ``floor``, the right's
+    (at -y) at most -floor (NaN passes, as np.maximum)."""
+    return (floor if left < floor else left), (-floor if right > -floor else right)
 
 
 @kernel
 def _current_lateral(p_pelvis_now, p_left_now, p_right_now, floor, n):
     """(n, 2) the ``current`` lateral distances, held over the horizon: the left and right
-    feet's y from the pelvis's now, at least ``floor`` from zero (left +, right -)."""
-    left = p_left_now[1] - p_pelvis_now[1]
-    right = p_right_now[1] - p_pelvis_now[1]
+    feet's y from the pelvis's now, floored."""
+    left, right = _floored(p_left_now[1] - p_pelvis_now[1], p_right_now[1] - p_pelvis_now[1], floor)
     out = np.empty((n, 2))
-    out[:, 0] = floor if left < floor else left  # NaN passes, as np.maximum
-    out[:, 1] = -floor if right > -floor else right
+    out[:, 0] = left
+    out[:, 1] = right
+    return out
+
+
+@kernel
+def _predicted_lateral(p_pelvis, p_left, p_right, floor):
+    """(N, 2) the ``predicted`` lateral distances: per sample, the feet's y from the
+    pelvis's, floored."""
+    n = p_pelvis.shape[0]
+    out = np.empty((n, 2))
+    for k in range(n):
+        out[k, 0], out[k, 1] = _floored(
+            p_left[k, 1] - p_pelvis[k, 1], p_right[k, 1] - p_pelvis[k, 1], floor
+        )
     return out
 
 
@@ -125,8 +137,8 @@ def _reference_angles(p_pelvis, p_left, p_right, k_pel, lateral):
         i = k if lateral.shape[0] > 1 else 0
         dx_left = p_left[k, 0] - p_pelvis[k, 0]  # eq. (28)
         dx_right = p_right[k, 0] - p_pelvis[k, 0]  # eq. (29)
-        left = np.arctan(k_pel * dx_left / lateral[i, 0])  # eq. (31)
-        right = np.arctan(k_pel * dx_right / lateral[i, 1])  # eq. (32)
+        left = math.atan(k_pel * dx_left / lateral[i, 0])  # eq. (31)
+        right = math.atan(k_pel * dx_right / lateral[i, 1])  # eq. (32)
         out[k] = -0.5 * (left + right)  # eq. (30), (33)
     return out
 

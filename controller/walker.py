@@ -16,7 +16,7 @@ Paper symbols -> names here:
     X_pel (eq. 19)            -> ``p_world_pelvis_des``
     X_c^d, X_c^m (eq. 19)     -> ``p_world_com_des``, ``p_world_com_meas``
     K_p (eq. 19)              -> ``params.com.pelvis_gain``
-    theta_pel, theta_dot      -> ``WalkerState.theta``, ``WalkerState.theta_dot``
+    theta_pel, theta_dot      -> ``StrategyInputs.theta`` (``q_cmd[0]``, commanded), ``.theta_dot``
     q_low, q_up (eq. 6-7)     -> ``q_cmd[lower]``, ``q_cmd[arms]``
     h_low^yaw, h_up^yaw       -> ``TickOutput.h_low``, ``TickOutput.h_up``
 
@@ -42,8 +42,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.arm_swing import build_arm_qp, solve_arm
+from controller.arm_swing import build_arm_qp, solve_arm, yaw_momentum
 from controller.com_mpc import ComMpc, ComPlan
+from controller.compiled import kernel
 from controller.footsteps import (
     FootstepPlan,
     PlanSample,
@@ -51,7 +52,6 @@ from controller.footsteps import (
     plan_footsteps,
 )
 from controller.ik import build_ik, flat_foot_velocity_command, solve_ik
-from controller.jit import kernel
 from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
 from controller.params import ControllerParams
 from controller.pelvis_mpc import PelvisPlan
@@ -180,6 +180,8 @@ class Walker:
         self.arm_solver = QpSolver(backend)
         self._last_waist_rate = 0.0  # [rad/s] waist rate of the last IK solution
         self.failure_counts = {name: 0 for name in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")}
+        self.ticks = 0  # ticks run
+        self.failed_ticks = 0  # ticks on which some QP failed (the layer fell back)
         self._pending: ControllerParams | None = None
         self._com_des_prev: np.ndarray | None = None
         self._plan_table: TickSamples | None = None  # the plan's rows of the coming ticks
@@ -317,14 +319,7 @@ class Walker:
         )
         q_low = self.q_cmd[:13]  # the lower joints (a view: q_cmd is replaced, never written)
         qp = build_ik(
-            ks.J_low,
-            v_des,
-            q_low,
-            self._q_min_low,
-            self._q_max_low,
-            p.ik,
-            dt,
-            waist_rate,
+            ks.J_low, v_des, q_low, self._q_min_low, self._q_max_low, p.ik, dt, waist_rate
         )
         q_dot_low, ik_ok = solve_ik(qp, self.ik_solver)
         if not ik_ok:
@@ -365,9 +360,13 @@ class Walker:
             "ik": not ik_ok,
             "arm_swing": not arm_ok,
         }
+        failed_tick = False
         for name, failed in failures.items():
             if failed:
                 self.failure_counts[name] += 1
+                failed_tick = True
+        self.ticks += 1
+        self.failed_ticks += failed_tick
         self.t = t + dt
         return TickOutput(
             t=t,
@@ -384,8 +383,8 @@ class Walker:
             zmp_ref=plan.zmp_ref[0].copy(),
             waist_angle=float(self.q_cmd[0]),
             waist_rate=self._last_waist_rate,
-            h_low=float(ks.cmm_yaw_low @ q_dot_low),
-            h_up=float(ks.cmm_yaw_up @ q_dot_up),
+            h_low=yaw_momentum(ks.cmm_yaw_low, q_dot_low),
+            h_up=yaw_momentum(ks.cmm_yaw_up, q_dot_up),
             kin=ks,
             step_index=int(plan.step[0]),
             in_ssp=bool(plan.in_ssp[0]),

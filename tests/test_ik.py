@@ -72,7 +72,7 @@ def test_reproduces_feasible_target(backend):
     assert np.linalg.norm(J @ qd - v) < 1e-4 * np.linalg.norm(v)
 
 
-def test_a_pinned_waist_rate_is_clipped_into_its_bounds():
+def test_waist_rate_pinned_and_clipped():
     J, v = _J(4), np.random.default_rng(5).normal(size=12) * 0.1
     qp = build_ik(J, v, np.zeros(13), QMIN, QMAX, IkParams(), DT, 0.7)
     qd, ok = solve_ik(qp, QpSolver("osqp"))

@@ -18,6 +18,7 @@ import numpy as np
 
 from app.run_spec import RunSpec
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from app.sim.summary import INCOMPLETE
 
 Samples = list[float | None]  # a series as JSON-safe floats (None = NaN / inf)
 
@@ -212,7 +213,7 @@ def failure_reasons(s: RunSummary | None) -> list[str]:
     out = []
     if s.fell:
         out.append(f"fell at {s.fall_time:.2f} s ({s.fall_reason})")
-    elif not s.success:
+    elif INCOMPLETE in s.other.get("unsuccessful", () if s.success else (INCOMPLETE,)):
         out.append(f"did not complete ({s.steps_completed}/{s.steps_planned} steps)")
     le = s.landing_error_max
     if le is not None and le >= LANDING_ERROR_CLEAN:

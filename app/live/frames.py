@@ -17,6 +17,7 @@ import numpy as np
 
 from app.sim.metrics import KAPPA_SINGULAR
 from app.sim.session import Session
+from app.sim.summary import solver_failure_share, unsuccessful, unsuccessful_text
 from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
 from models.dyros_jet import ANKLE_BODIES, HIP_BODIES
@@ -91,6 +92,8 @@ class RobotFrame:
     horizon: Horizon | None  # None before the first tick
     plan: FootstepPlan  # the footstep plan in force (immutable; replaced on replans)
     params: ControllerParams  # the parameters in force in this robot's walker
+    # why its finished plan is no success, in words ("" otherwise: app.sim.summary)
+    unsuccessful: str = ""
 
     @property
     def status(self) -> str:
@@ -236,4 +239,13 @@ def robot_frame(
         horizon=horizon_of(session),
         plan=plan,
         params=session.walker.snapshot_params(),
+        unsuccessful=_unsuccessful(session) if session.walker.finished else "",
+    )
+
+
+def _unsuccessful(session: Session) -> str:
+    """Why a finished walk is no success, in words ("" for a success)."""
+    landed = session.landings.values()
+    return unsuccessful_text(
+        unsuccessful(session), max(landed) if landed else None, solver_failure_share(session)
     )

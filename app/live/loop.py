@@ -62,6 +62,7 @@ from app.live.frames import LiveFrame, robot_frame
 from app.live.history import HISTORY_DECIMATION, ROW_COLUMNS
 from app.live.intent import Intent
 from app.sim.session import RunConfig, Session
+from app.sim.summary import unsuccessful
 from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
 from controller.strategy import StrategyError
@@ -365,7 +366,7 @@ class LiveLoop:
             elif s.walker.finished:
                 robot.finished_clock = self.clock
                 robot.walks_completed += 1
-                robot.last_walk_success = True
+                robot.last_walk_success = not unsuccessful(s)
         if robot.held:
             self._hold(robot)
             return
@@ -395,7 +396,7 @@ class LiveLoop:
         elif s.walker.finished:
             robot.finished_clock = self.clock + params.control_dt
             robot.walks_completed += 1
-            robot.last_walk_success = True
+            robot.last_walk_success = not unsuccessful(s)
 
     @staticmethod
     def _hold(robot: _Robot) -> None:

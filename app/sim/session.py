@@ -21,8 +21,8 @@ import numpy as np
 
 from app.sim.metrics import COL, COLUMNS, Series, two_step_windows
 from app.sim.world import Contacts, World
+from controller.compiled import kernel
 from controller.footsteps import FootstepPlan
-from controller.jit import kernel
 from controller.kinematics import RobotKinematics
 from controller.params import ControllerParams
 from controller.strategy import StrategyError
@@ -86,12 +86,14 @@ class Session:
 
     What is measured when (``record``):
 
-    - every tick, always: the controller, the physics, the energy at each step's start and
-      the fall test (pelvis height, torso tilt, a body other than the feet on the floor);
+    - every tick, always: the controller, the physics, the landing error half a DSP after
+      each touch-down (a success needs them: ``app.sim.summary``), the energy at each step's
+      start and the fall test (pelvis height, torso tilt, a body other than the feet on the
+      floor);
     - ``record=True`` (headless runs: ``simulate``, the study, the bench): also every tick,
-      because the summary and the study read every tick (maxima, ratios, landing errors,
-      events): the :class:`Measurement`, its row of the time series, the landing errors
-      and the counts of CoP-in-support and speed-limited ticks;
+      because the summary and the study read every tick (maxima, ratios, events): the
+      :class:`Measurement`, its row of the time series and the counts of CoP-in-support and
+      speed-limited ticks;
     - ``record=False`` (the live tool): no series; :attr:`measured` (contacts, CoP, support
       polygon, CoM, yaw momentum) and the tick's kappa and reach are computed when a reader
       first asks after a tick, i.e. at the display rate. Its LIPM ZMP is NaN unless the
@@ -297,30 +299,30 @@ class Session:
         self.series.append_values(row)
 
     def _bookkeep(self, out: TickOutput, m: Measurement) -> None:
-        """Step starts (energy), landing errors, falls, ZMP and speed-limit counts."""
-        world, plan = self.world, self.walker.plan
+        """Recorded runs: ZMP and speed-limit counts, then what every run keeps."""
         if out.speed_limited:
             self.speed_limited_ticks += 1
         if m.cop_inside is not None and not self.fell:
             self.zmp_ticks += 1
             self.zmp_inside += int(m.cop_inside)
+        self._energy_and_falls(out, m.t, m.contacts.other_contact)
+
+    def _energy_and_falls(self, out: TickOutput, t: float, other_contact: bool | None) -> None:
+        """Every tick: landing errors, the energy at each step's start and the fall test
+        (docs/DESIGN.md, "What counts as a fall");
+        ``other_contact`` from the tick's measured contacts, or None to look it up."""
+        if self.fell:
+            return
         # Landing error half a DSP after each touch-down, relative to the support foot
         # (per-step timing: a replan changes the timing of later steps only).
+        plan = self.walker.plan
         j = len(self.landings)  # landings are recorded in order
-        if j < plan.n and not self.fell and m.t >= self._landing_check_time(plan, j):
-            soles = world.sole_positions()
+        if j < plan.n and t >= self._landing_check_time(plan, j):
+            soles = self.world.sole_positions()
             side = int(plan.swing_side[j])
             landed = soles[side, :2] - soles[1 - side, :2]
             planned = plan.swing_to[j, :2] - plan.support_pos[j, :2]
             self.landings[j] = float(np.linalg.norm(landed - planned))
-        self._energy_and_falls(out, m.t, m.contacts.other_contact)
-
-    def _energy_and_falls(self, out: TickOutput, t: float, other_contact: bool | None) -> None:
-        """Every tick: the energy at each step's start and the fall test (docs/DESIGN.md, "What
-        counts as a fall");
-        ``other_contact`` from the tick's measured contacts, or None to look it up."""
-        if self.fell:
-            return
         k = out.step_index
         if 0 <= k < self.walker.plan.n and k not in self.energy_at_step_start:
             world = self.world

@@ -13,6 +13,11 @@ Definitions (docs/DESIGN.md, "Metrics"):
   knee makes the leg columns singular, but the waist column restores J_low's rank (at a
   straight left knee: kappa 82 for J_low, 1.2e8 for the legs: tests/test_kinematics.py), so
   the clean criterion reads the legs' figure, for every method alike;
+- *success* (:func:`unsuccessful`): no fall, the pelvis strategy did not stop the walk (an
+  exception or no rate from a user's strategy), the plan finished (the final stand included) and
+  every step landed, every landing within ``LANDING_ERROR_CLEAN`` (2 cm) of its foothold, and
+  QPs failed on at most ``SOLVER_FAILURE_SHARE`` (1 %) of the ticks; ``unsuccessful`` lists
+  the reasons of a run that is not one (empty for a success);
 - *clean*: success, every landing within ``LANDING_ERROR_CLEAN``, no QP failure, no servo
   saturation, no IK tick at the joint-speed limit, kappa of the leg columns below
   ``KAPPA_SINGULAR``.
@@ -30,6 +35,19 @@ from controller.kinematics import KAPPA_CAP
 if TYPE_CHECKING:
     from app.sim.session import Session
 
+# A success's share of ticks on which some QP failed (its layer fell back) at most: a failed
+# QP holds a layer's last command, so more than 2 ticks a second at 200 Hz is no walk of the
+# controller's own (every QP failing, the robot stood still and counted as a success).
+SOLVER_FAILURE_SHARE = 0.01
+# Why a run is not a success (``unsuccessful``), in this order.
+FELL, STRATEGY_ERROR, INCOMPLETE, MISSED_FOOTHOLDS, SOLVER_FAILURES = (
+    "fell",
+    "strategy_error",
+    "incomplete",
+    "missed_footholds",
+    "solver_failures",
+)
+
 SUMMARY_KEYS = (
     "method",
     "arms",
@@ -38,6 +56,7 @@ SUMMARY_KEYS = (
     "steps_planned",
     "steps_completed",
     "success",
+    "unsuccessful",
     "fell",
     "fall_time",
     "landing_error_max",
@@ -49,6 +68,7 @@ SUMMARY_KEYS = (
     "condition_number_max",
     "zmp_in_support_ratio",
     "solver_failures",
+    "solver_failure_share",
     "sim_time",
     "wall_time",
     "realtime_factor",
@@ -66,6 +86,48 @@ TIMING_KEYS = (
     "strategy_ms_max",
 )
 DEG = 180.0 / np.pi
+
+
+def solver_failure_share(session: Session) -> float:
+    """The share of the run's ticks on which some QP failed (0 before the first tick)."""
+    w = session.walker
+    return w.failed_ticks / w.ticks if w.ticks else 0.0
+
+
+def unsuccessful(session: Session) -> list[str]:
+    """Why the run is not a success, in the order of :data:`FELL` ..; empty for a success
+    (the module docstring). A live run asks again after every tick: until its plan is over
+    it is ``INCOMPLETE``."""
+    reasons = []
+    if session.fell:
+        reasons.append(FELL)
+    elif session.error is not None:
+        reasons.append(STRATEGY_ERROR)
+    elif not (session.walker.finished and len(session.landings) == session.plan.n):
+        reasons.append(INCOMPLETE)
+    if session.landings and max(session.landings.values()) >= LANDING_ERROR_CLEAN:
+        reasons.append(MISSED_FOOTHOLDS)
+    if solver_failure_share(session) > SOLVER_FAILURE_SHARE:
+        reasons.append(SOLVER_FAILURES)
+    return reasons
+
+
+def unsuccessful_text(reasons: list[str], landing_error_max: float | None, share: float) -> str:
+    """The reasons in words, for the command line and the live label."""
+    words = {
+        FELL: "it fell",
+        STRATEGY_ERROR: "its pelvis strategy stopped it",
+        INCOMPLETE: "its plan did not finish",
+        MISSED_FOOTHOLDS: (
+            f"a landing missed its foothold by {(landing_error_max or 0.0) * 100:.1f} cm "
+            f"({LANDING_ERROR_CLEAN * 100:.0f} cm allowed)"
+        ),
+        SOLVER_FAILURES: (
+            f"QPs failed on {share * 100:.0f} % of the ticks "
+            f"({SOLVER_FAILURE_SHARE * 100:.0f} % allowed)"
+        ),
+    }
+    return "; ".join(words[r] for r in reasons)
 
 
 def summarize(session: Session) -> dict[str, Any]:
@@ -96,12 +158,8 @@ def summarize(session: Session) -> dict[str, Any]:
     strategy_ms = strategy_ms[np.isfinite(strategy_ms)] if len(strategy_ms) else np.zeros(1)
     sim_time = float(session.t)
     failures = sum(session.walker.failure_counts.values())
-    success = (
-        (not session.fell)
-        and session.error is None
-        and session.walker.finished
-        and len(session.landings) == plan.n
-    )
+    reasons = unsuccessful(session)
+    success = not reasons
     margin = s.column("balance_margin")[walking]
     margin = margin[np.isfinite(margin)]
     tilt = s.column("sole_tilt")[walking]
@@ -115,6 +173,7 @@ def summarize(session: Session) -> dict[str, Any]:
         "steps_planned": n_walk,
         "steps_completed": int(steps_completed),
         "success": bool(success),
+        "unsuccessful": reasons,
         "fell": bool(session.fell),
         "fall_time": session.fall_time,
         "landing_error_max": float(max(landed)) if landed else None,
@@ -128,6 +187,7 @@ def summarize(session: Session) -> dict[str, Any]:
             session.zmp_inside / session.zmp_ticks if session.zmp_ticks else 0.0
         ),
         "solver_failures": int(failures),
+        "solver_failure_share": solver_failure_share(session),
         "sim_time": sim_time,
         "wall_time": session.wall_time,
         "realtime_factor": sim_time / session.wall_time if session.wall_time > 0 else None,

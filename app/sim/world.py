@@ -29,7 +29,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 
-from controller.jit import kernel
+from controller.compiled import kernel
 from models.dyros_jet import (
     ARM_JOINTS,
     FOOT_GEOMS,

@@ -13,7 +13,8 @@ parameters (step length from the grid, else the default); the row has the keys o
 and the summary's other scalar extras.
 
 ``limit`` (:class:`LimitTask`, logic in :class:`LimitSearch`): the longest step length that
-*walks* (no fall, the plan completed, every landing within ``LANDING_ERROR_CLEAN`` = 2 cm) and
+*walks* (a success: no fall, the plan completed, every landing within ``LANDING_ERROR_CLEAN``
+= 2 cm, QPs failing on at most 1 % of the ticks) and
 the longest that is *clean* (:func:`clean`: walks, and no QP failure, no servo saturation, no
 IK tick at the joint-speed limit, kappa(legs) below ``KAPPA_SINGULAR``). A search can bracket
 more criteria from the same runs: :func:`criteria` gives the clean criterion at other
@@ -46,7 +47,7 @@ from typing import Any
 
 from app.run_spec import RunSpec, length
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
-from app.sim.summary import SUMMARY_KEYS
+from app.sim.summary import MISSED_FOOTHOLDS, SUMMARY_KEYS
 from app.sweep.grid import Cell
 
 SEARCH_MIN = 0.10  # [m] shortest step length the limit search tries
@@ -74,9 +75,16 @@ LIMIT_COLUMNS = limit_columns()
 
 
 def walks(summary: Mapping[str, Any], landing: float = LANDING_ERROR_CLEAN) -> bool:
-    """No fall, the plan completed, every landing within ``landing`` [m]."""
+    """A success but for the landings (no fall, the plan completed, QPs within their share of
+    ticks: ``app.sim.summary``), every landing within ``landing`` [m]; at the default, the
+    summary's own success."""
     le = summary.get("landing_error_max")
-    return bool(summary.get("success")) and le is not None and le < landing
+    reasons = summary.get("unsuccessful")
+    if reasons is None:  # a summary without its reasons: its success says it all
+        landed = bool(summary.get("success"))
+    else:
+        landed = all(r == MISSED_FOOTHOLDS for r in reasons)
+    return landed and le is not None and le < landing
 
 
 def clean(

@@ -467,6 +467,9 @@ def label_text(r: RobotFrame, frame: LiveFrame) -> str:
         return f"⚠ {head} FELL {when}\n{why}\n{restart}"
     if r.waiting:
         return f"{head}\nstanding by to start in phase"
+    if r.finished and r.unsuccessful:  # the reasons one a line
+        why = r.unsuccessful.replace("; ", "\n")
+        return f"⚠ {head} · finished its plan, NO SUCCESS\n{why}\nall robots restart together"
     if r.finished:
         return f"{head} · walked its whole plan\nall robots restart together"
     reach = r.reach
