@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 
 import numpy as np
 import pytest
@@ -262,7 +263,14 @@ def test_client_drives_a_served_tool_and_raises_the_apis_refusals(served):
     token a change of the shared session raises NotAllowed with the API's message."""
     student = pw.Client(served)
     assert student.health()["instructor"] is True
-    assert [r["method"] for r in student.state()["robots"]] == ["fixed", "mpc"]
+    # the session's robots run in two workers: a frame shows both once both parts delivered
+    shown: list[str] = []
+    for _ in range(600):
+        shown = [r["method"] for r in student.state()["robots"]]
+        if len(shown) == 2:
+            break
+        time.sleep(0.1)
+    assert shown == ["fixed", "mpc"]
     with pytest.raises(pw.NotAllowed) as refused:
         student.pause()
     assert refused.value.status == 401
