@@ -230,6 +230,10 @@ class LiveLoop:
         dt = intent.params.control_dt
         if old is None:  # join the session's time base (a part may start late)
             self.clock = round(max(self._target(intent), 0.0) / dt) * dt
+            # what was asked before this loop existed was carried out by the others (a part
+            # added later would replay every single step and push of the session's past)
+            self.steps_done = intent.step_requests
+            self.pushes_done = intent.pushes[-1].number if intent.pushes else 0
         rebuild = (
             old is None
             or intent.methods != old.methods

@@ -339,6 +339,18 @@ class SessionRegistry:
             out.append({**w, "robots": sorted(robots)})
         return out
 
+    def realtime_factor_min(self) -> float | None:
+        """The lowest real-time factor among the sessions running (paused ones left out): how
+        well the server keeps real time, told to anyone without telling whose session."""
+        with self._lock:
+            sessions = [e.session for e in self._entries.values()]
+        factors = [
+            p.realtime_factor
+            for p in (s.playback() for s in sessions)
+            if p.realtime_factor is not None and not p.paused
+        ]
+        return min(factors) if factors else None
+
     def count_private(self) -> int:
         with self._lock:
             return len([sid for sid in self._entries if sid != SHARED])

@@ -165,7 +165,8 @@ def sessions_router(
     def list_sessions(caller: Caller = Who) -> dict[str, Any]:
         """The sessions that run, their worker and real-time factor, and the capacity. A
         private session is listed (with its id) only to its holder and to the instructor's
-        bearer token; everyone else reads how many there are."""
+        bearer token; everyone else reads how many there are and the lowest real-time factor
+        of all sessions (how well the server keeps up)."""
         reveal = reveal_to(registry, caller)
         return finite(
             {
@@ -173,6 +174,7 @@ def sessions_router(
                 "shared_demo": registry.has_shared,
                 "sessions": registry.list(reveal),
                 "private_sessions": registry.count_private(),
+                "realtime_factor_min": registry.realtime_factor_min(),  # every session's
                 "robot_slots_free": registry.capacity_private,
                 "sessions_per_address": registry.per_address,
                 "workers": registry.workers(reveal),
