@@ -199,7 +199,7 @@ def session_router(
     """The session-scoped routes under ``prefix``; ``resolve`` is a FastAPI dependency
     returning (session id, session) once the caller may use it; changes go through
     :func:`instructor_check`."""
-    r = router(prefix, "live session")
+    r = router(prefix, None)  # each route is tagged (/docs)
     Session = Depends(resolve)
     Writable = Depends(instructor_check(instructor or Instructor(None), resolve, private))
 
