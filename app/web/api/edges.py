@@ -12,6 +12,7 @@ import email.message
 import json
 import math
 from collections.abc import Callable, Coroutine
+from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -129,7 +130,7 @@ class JsonBodyRoute(APIRoute):
 def router(prefix: str = "", tag: str | None = "pages", **kw: Any) -> APIRouter:
     """A router whose routes take JSON bodies only. ``tag``: its routes' heading in /docs
     (None: each route names its own; /docs lists an operation under every tag it has)."""
-    tags = [tag] if tag is not None else []
+    tags: list[str | Enum] = [tag] if tag is not None else []
     return APIRouter(prefix=prefix, tags=tags, route_class=JsonBodyRoute, **kw)
 
 
