@@ -294,7 +294,14 @@ class WorkerPool:
                 continue
             session, method = owner
             if kind == "frame":
-                session.receive_part(method, w.codec.decode(pid, payload))
+                try:
+                    frame = w.codec.decode(pid, payload)
+                except KeyError:
+                    # sent by a part closed and opened again under the same id before the
+                    # worker read the close (its plan went with it): stale, and no reason to
+                    # stop reading this worker's frames
+                    continue
+                session.receive_part(method, frame)
             elif kind == "error":
                 session.error = payload.splitlines()[0]
                 log.error("%s, robot %s: %s", session.label, method, payload)
