@@ -109,10 +109,13 @@ class NoticeOnly:
     def __init__(self, client: Any, notice: str):
         self.target = client
         client.gui.configure_theme(dark_mode=False, show_logo=False, show_share_button=False)
-        client.gui.add_markdown(notice)
+        self.notice = client.gui.add_markdown(notice)
 
     def draw(self, now: float) -> None:
         """Nothing moves."""
+
+    def hide(self) -> None:
+        self.notice.visible = False
 
 
 class _Waiting:
@@ -252,11 +255,17 @@ class Display:
                 return
             with self._lock:
                 gone = self.waiting.pop(client.client_id, None) is None
+                old = self.views.pop(client.client_id, None)  # drawn no more
             if gone:  # it left meanwhile
                 self.registry.detach(owner)
                 continue
             try:
-                client.gui.reset()
+                # the old panel is hidden, not removed (ControlPanel.hide says why); the scene
+                # is rebuilt (a scene node's late update is only a note on the page)
+                if isinstance(old, View):
+                    old.panel.hide()
+                elif old is not None:
+                    old.hide()
                 client.scene.reset()
                 view = View(client, session, self.registry, OWN)
             except Exception:  # noqa: BLE001 - a browser that left while its view was built
