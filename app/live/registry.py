@@ -284,14 +284,25 @@ class SessionRegistry:
         for sid in ended:
             self.close(sid)
 
-    def close(self, sid: str) -> None:
-        """End a private session and free its room in the workers."""
+    def close(self, sid: str, only_if: Callable[[_Entry], bool] = lambda _e: True) -> None:
+        """End a private session and free its room in the workers (``only_if`` its entry
+        passes, checked under the lock: the reaper's idle session may have been found again
+        by a reload meanwhile)."""
         if sid == SHARED:
             return
         with self._lock:
-            entry = self._entries.pop(sid, None)
-        if entry is not None and self.pool is not None:
+            entry = self._entries.get(sid)
+            if entry is None or not only_if(entry):
+                return
+            del self._entries[sid]
+        if self.pool is not None:
             self.pool.close(entry.session)  # type: ignore[arg-type]
+
+    def _idle(self, e: _Entry, now: float) -> bool:
+        """Nothing showed or used a private session for its time: an API-opened one
+        ``idle_s``, a page's ``linger_s``."""
+        limit = self.idle_s if e.opened_by == "api" else self.linger_s
+        return not e.viewers and now - e.last_used > limit
 
     def list(self, reveal: Callable[[str], bool] = lambda _sid: False) -> list[dict]:
         """One line per session the caller may see: the shared one, and the private ones
@@ -367,14 +378,10 @@ class SessionRegistry:
             now = time.monotonic()
             with self._lock:
                 idle = [
-                    sid
-                    for sid, e in self._entries.items()
-                    if sid != SHARED
-                    and not e.viewers
-                    and now - e.last_used > (self.idle_s if e.opened_by == "api" else self.linger_s)
+                    sid for sid, e in self._entries.items() if sid != SHARED and self._idle(e, now)
                 ]
             for sid in idle:
-                self.close(sid)
+                self.close(sid, only_if=lambda e: self._idle(e, time.monotonic()))
 
     def shutdown(self, stop_shared: bool = True) -> None:
         """End the private sessions (and the shared one, unless the caller owns it)."""
