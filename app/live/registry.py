@@ -32,6 +32,7 @@ from __future__ import annotations
 import builtins
 import hmac
 import ipaddress
+import re
 import secrets
 import threading
 import time
@@ -75,9 +76,13 @@ def limited(address: str | None) -> bool:
     return not (mapped or ip).is_loopback
 
 
+_CREDENTIAL = re.compile(rf"[A-Za-z0-9_\-]{{{CREDENTIAL_MIN},256}}")  # secrets.token_urlsafe's
+
+
 def usable_credential(value: str | None) -> str | None:
-    """``value`` if it can serve as a credential (long enough to be unguessable), else None."""
-    if value is None or len(value) < CREDENTIAL_MIN or len(value) > 256:
+    """``value`` if it can serve as a credential (URL-safe characters, long enough to be
+    unguessable), else None."""
+    if value is None or _CREDENTIAL.fullmatch(value) is None:
         return None
     return value
 
@@ -323,7 +328,7 @@ class SessionRegistry:
                     "kind": "shared" if sid == SHARED else "private",
                     "opened_by": e.opened_by,
                     "address": e.address,
-                    "viewers": viewers,
+                    "viewers": viewers if sid != SHARED else None,  # (not counted)
                     "worker_pids": getattr(e.session, "worker_pids", []),
                     "methods": list(e.session.intent.methods),
                     "realtime_factor": playback.realtime_factor,
