@@ -148,6 +148,15 @@ def build_parser() -> argparse.ArgumentParser:
         "for private sessions)",
     )
     p.add_argument(
+        "--sessions-per-address",
+        type=positive_int,
+        default=None,
+        metavar="N",
+        help="with --sessions private: private sessions one client address holds at most, "
+        "its browsers' and scripts' together (default 1; the server's own machine is not "
+        "limited)",
+    )
+    p.add_argument(
         "--instructor-token",
         default=None,
         metavar="TOKEN",
@@ -478,6 +487,7 @@ def main(argv: list[str] | None = None) -> int:
                 args.shared_demo,
                 args.instructor_token,
                 args.strategies,
+                sessions_per_address=args.sessions_per_address,
             )
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main

@@ -15,28 +15,49 @@ import contextlib
 import os
 import signal
 
+import httpx
 import pytest
 from browser_util import (
+    WAIT_S,
+    api,
     chromium,
     click_slider,
-    get,
     needs_chromium,
     open_scene,
     serving,
     slider_value,
-    wait_robots,
     wait_until,
 )
 
 pytestmark = needs_chromium
 VIEWPORT = {"width": 1300, "height": 720}  # small: three pages render in software at once
+# A private session answers only to its browser and the instructor: the test reads every
+# session as the instructor (the browsers here connect to the scene alone, without a page)
+TOKEN = "private-browsers-4Wd-token"
+TEACHER = {"Authorization": f"Bearer {TOKEN}"}
 
 
 @pytest.fixture(scope="module")
 def tool():
     args = ("--sessions", "private", "--workers", "1", "--robots-per-worker", "3")
-    with serving(*args, "--methods", "mpc") as (base, viser_url, _proc):
+    with serving(*args, "--methods", "mpc", "--instructor-token", TOKEN) as (base, viser_url, _):
         yield base, viser_url
+
+
+def get(base: str, path: str, sid: str | None = None):
+    """``GET`` an API route as the instructor."""
+    r = httpx.get(f"{api(base, sid)}/{path}", headers=TEACHER, timeout=30)
+    r.raise_for_status()
+    return r.json()
+
+
+def wait_robots(base: str, what: str, ok, sid: str | None = None, timeout=WAIT_S) -> list:
+    """Wait until every robot of session ``sid``'s state satisfies ``ok``; the robots."""
+    return wait_until(
+        lambda: (rs := get(base, "state", sid)["robots"]) and all(ok(r) for r in rs) and rs,
+        what,
+        timeout,
+    )
 
 
 @pytest.fixture(scope="module")

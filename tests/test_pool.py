@@ -261,20 +261,27 @@ def test_without_a_shared_demo_every_slot_is_for_private_sessions(pool):
             assert health["sessions"] == 0
             listed = client.get("/api/sessions").json()
             assert listed["shared_demo"] is False and listed["sessions"] == []
-            opened = [client.post("/api/sessions").json()["id"] for _ in range(2)]
-            assert pool.robots() == 4 == pool.capacity  # every slot a student's
+        # two clients (addresses), one session each
+        opened = []
+        for address in ("10.0.0.1", "10.0.0.2"):
+            with TestClient(app, client=(address, 5000)) as client:
+                opened.append(client.post("/api/sessions").json())
+        assert pool.robots() == 4 == pool.capacity  # every slot a student's
+        with TestClient(app, client=("10.0.0.3", 5000)) as client:
             assert client.post("/api/sessions").status_code == 503  # full: said so
-            sid = opened[0]
-            assert client.get(f"/api/sessions/{sid}/state").status_code == 200
-            assert client.post(f"/api/sessions/{sid}/sim/pause").json()["paused"] is True
+            auth = {"Authorization": f"Bearer {opened[0]['token']}"}
+            sid = opened[0]["id"]
+            assert client.get(f"/api/sessions/{sid}/state", headers=auth).status_code == 200
+            r = client.post(f"/api/sessions/{sid}/sim/pause", headers=auth)
+            assert r.json()["paused"] is True
     finally:
         registry.shutdown()
     assert pool.robots() == 0
 
 
 def test_with_an_instructor_only_the_instructor_sees_private_sessions_ids(pool):
-    """Whoever names a private session may change it: its id is unguessable, and with an
-    instructor only the instructor's listing shows the ids (a script gets its own from POST)."""
+    """A private session's id is listed only to its holder and the instructor; a script drives
+    its own with the token it was given (tests/test_private_sessions.py tries the rest)."""
     from fastapi.testclient import TestClient
 
     from app.web.auth import Instructor
@@ -284,20 +291,25 @@ def test_with_an_instructor_only_the_instructor_sees_private_sessions_ids(pool):
     )
     app = create_app(registry, instructor=Instructor("T0k3n"))
     try:
-        with TestClient(app) as client:
-            mine = client.post("/api/sessions").json()["id"]
-            other = client.post("/api/sessions").json()["id"]
-            assert len({mine, other}) == 2 and min(len(mine), len(other)) >= 12
-            student = client.get("/api/sessions").json()["sessions"]
-            assert len(student) == 2 and [s["id"] for s in student] == [None, None]
-            teacher = client.get("/api/sessions", headers={"Authorization": "Bearer T0k3n"}).json()[
-                "sessions"
-            ]
-            assert sorted(s["id"] for s in teacher) == sorted([mine, other])
+        opened = []
+        for address in ("10.0.0.1", "10.0.0.2"):
+            with TestClient(app, client=(address, 5000)) as client:
+                opened.append(client.post("/api/sessions").json())
+        mine, other = (o["id"] for o in opened)
+        assert len({mine, other}) == 2 and min(len(mine), len(other)) >= 12
+        with TestClient(app, client=("10.0.0.9", 5000)) as client:
+            stranger = client.get("/api/sessions").json()
+            assert stranger["sessions"] == [] and stranger["private_sessions"] == 2
+            teacher = client.get("/api/sessions", headers={"Authorization": "Bearer T0k3n"})
+            assert sorted(s["id"] for s in teacher.json()["sessions"]) == sorted([mine, other])
             wrong = client.get("/api/sessions", headers={"Authorization": "Bearer nope"})
-            assert [s["id"] for s in wrong.json()["sessions"]] == [None, None]
-            # a script still drives its own session by the id it was given
-            assert client.post(f"/api/sessions/{mine}/sim/pause").json()["paused"] is True
+            assert wrong.json()["sessions"] == []
+            auth = {"Authorization": f"Bearer {opened[0]['token']}"}
+            own = client.get("/api/sessions", headers=auth).json()["sessions"]
+            assert [s["id"] for s in own] == [mine]
+            # a script drives its own session with its token
+            r = client.post(f"/api/sessions/{mine}/sim/pause", headers=auth)
+            assert r.json()["paused"] is True
     finally:
         registry.shutdown()
 

@@ -235,14 +235,28 @@ class LiveLoop:
 
     def _apply(self, intent: Intent) -> None:
         old = self.applied
+        dt = intent.params.control_dt
         if old is None:  # join the session's time base (a part may start late)
-            dt = intent.params.control_dt
             self.clock = round(max(self._target(intent), 0.0) / dt) * dt
-        if (
+            # what was asked before this loop existed was carried out by the others (a part
+            # added later would replay every single step and push of the session's past)
+            self.steps_done = intent.step_requests
+            self.pushes_done = intent.pushes[-1].number if intent.pushes else 0
+        rebuild = (
             old is None
             or intent.methods != old.methods
             or (intent.reset_requests != self._resets_done)
-        ):
+        )
+        if rebuild and intent.paused and self.clock < intent.start_clock - dt / 2:
+            # Paused, the time base stands where it was last anchored (the last resume), while
+            # single steps moved the session on: a loop built now (a robot added while paused,
+            # a worker replaced) would join there, behind the others. Its merged frames would
+            # take the session clock back, the catch-up would move the base back with it, and
+            # the other loops would wait out the difference, their robots standing at t = 0.
+            # Rebuilt robots stand still until start_clock (the session's present) anyway:
+            # go there.
+            self.clock = round(intent.start_clock / dt) * dt
+        if rebuild:
             user_reset = (intent.reset_requests - intent.auto_restarts) != self._user_resets
             before = self.robots
             self.robots = {m: self._robot(m, intent.params) for m in intent.methods}
@@ -268,7 +282,7 @@ class LiveLoop:
             if old is None or intent.methods != old.methods or user_reset:
                 self._rows = {}
                 self._restarted = True
-        elif intent.params != old.params:
+        elif old is not None and intent.params != old.params:
             for robot in self.robots.values():
                 robot.session.walker.set_params(
                     dataclasses.replace(intent.params, method=robot.method)

@@ -71,9 +71,17 @@ class WorkerDeath:
 class RemoteSession(SessionView):
     """A live session whose robots run in worker processes, one part per robot."""
 
-    def __init__(self, sid: str, intent: Intent, pool: WorkerPool, keep_s: float = KEEP_S):
+    def __init__(
+        self,
+        sid: str,
+        intent: Intent,
+        pool: WorkerPool,
+        keep_s: float = KEEP_S,
+        label: str | None = None,
+    ):
         super().__init__(intent, keep_s, start_delay=START_DELAY_S)
         self.sid = sid
+        self.label = label or f"session {sid}"  # in logs (a private session: not its id)
         self.pool = pool
         self.parts: dict[str, _Worker] = {}  # method -> the worker running it
         # method -> its part's recent frames (newest last): the merged frame shows every robot
@@ -288,10 +296,17 @@ class WorkerPool:
                 continue
             session, method = owner
             if kind == "frame":
-                session.receive_part(method, w.codec.decode(pid, payload))
+                try:
+                    frame = w.codec.decode(pid, payload)
+                except KeyError:
+                    # sent by a part closed and opened again under the same id before the
+                    # worker read the close (its plan went with it): stale, and no reason to
+                    # stop reading this worker's frames
+                    continue
+                session.receive_part(method, frame)
             elif kind == "error":
                 session.error = payload.splitlines()[0]
-                log.error("session %s, robot %s: %s", session.sid, method, payload)
+                log.error("%s, robot %s: %s", session.label, method, payload)
         if not w.stopping and not self._stopped:
             self._replace(w)
 
@@ -358,13 +373,20 @@ class WorkerPool:
                         raise PoolFull("no worker has room for another robot")
                     self._open_part(min(free, key=lambda x: x.robots), session, method)
 
-    def open(self, intent: Intent, keep_s: float = KEEP_S, sid: str | None = None) -> RemoteSession:
-        """A new session (its robots placed where there is room); PoolFull otherwise."""
+    def open(
+        self,
+        intent: Intent,
+        keep_s: float = KEEP_S,
+        sid: str | None = None,
+        label: str | None = None,
+    ) -> RemoteSession:
+        """A new session (its robots placed where there is room); PoolFull otherwise.
+        ``label``: how logs name it (default: its id)."""
         with self._lock:
             sid = sid or f"s{len(self.sessions) + 1}"
             while sid in self.sessions:
                 sid += "'"
-            session = RemoteSession(sid, intent, self, keep_s)
+            session = RemoteSession(sid, intent, self, keep_s, label=label)
             self.reserve(session, intent.methods)
             self.sessions[sid] = session
             self.sync_parts(session, session.intent)

@@ -4,11 +4,24 @@ Modes (``pelvic-walk serve --sessions shared|private``):
 - ``shared`` (the default, a lecture demo): one session that every browser watches and
   changes;
 - ``private``: each browser gets its own session (robots, parameters, plots, playback) while
-  a worker has room; beyond that a browser is told so and watches the shared demo. A private
-  session ends when its browser disconnects, or after ``idle_s`` without a browser or an API
-  call (sessions opened through the API). The shared demo runs too, holding its robots'
-  worker slots, unless the server is started without it (``serve --no-shared-demo``): then
-  every slot is for private sessions and there is no shared session to watch.
+  a worker has room; beyond that a browser is told so and watches the shared demo. The shared
+  demo runs too, holding its robots' worker slots, unless the server is started without it
+  (``serve --no-shared-demo``): then every slot is for private sessions and there is no
+  shared session to watch.
+
+A private session belongs to whoever holds its *credential*, a secret that is never its id:
+the seat cookie of the browser whose page opened it (``opened_by="page"``), or the token
+``POST /api/sessions`` answered with (``"api"``); a scene connected without a page's cookie
+(``"scene"``) gets a session only that connection sees. Only the holder and the instructor may
+read, change or end it, and only they are shown its id (:meth:`SessionRegistry.list`,
+:meth:`SessionRegistry.workers`); everyone else is told of it by a count. A holder that asks
+again gets its own session back (:meth:`SessionRegistry.owned`), and one client address holds
+at most ``per_address`` of them (:class:`AddressFull`; the server's own machine, loopback, is
+not limited, and the instructor may open more through the API).
+
+A private session ends: a page's ``linger_s`` after its last view closed and its last API call
+(a reload or a reconnect within that time gets it back); a scene's when its connection closes;
+an API-opened one after ``idle_s`` without calls.
 
 Sessions run in worker processes (:class:`~app.live.pool.WorkerPool`) or, with no pool, the
 shared one in a thread of this process (:class:`~app.live.session.LiveSim`).
@@ -16,10 +29,15 @@ shared one in a thread of this process (:class:`~app.live.session.LiveSim`).
 
 from __future__ import annotations
 
+import builtins
+import hmac
+import ipaddress
+import re
 import secrets
 import threading
 import time
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
 
 from app.live.intent import Intent
 from app.live.pool import PoolFull, WorkerPool
@@ -27,6 +45,10 @@ from app.live.session import LiveSim, SessionView
 
 SHARED = "shared"
 MODES = ("shared", "private")
+OPENED_BY = ("page", "scene", "api")  # who opens a private session (module docstring)
+LINGER_S = 20.0  # [s] a page's session outlives its last view and API call (a reload)
+PER_ADDRESS = 1  # private sessions one client address holds (serve --sessions-per-address)
+CREDENTIAL_MIN = 20  # characters a credential has at least (a seat cookie, a token)
 
 
 class NoSuchSession(KeyError):
@@ -37,17 +59,56 @@ class SessionsDisabled(RuntimeError):
     """Private sessions asked for while the server runs in shared mode."""
 
 
+class AddressFull(RuntimeError):
+    """This client address holds as many private sessions as one may."""
+
+
+def limited(address: str | None) -> bool:
+    """Whether ``address`` counts against the per-address limit: every address but the
+    server's own machine (loopback; its users could start a server of their own)."""
+    if not address:
+        return True
+    try:
+        ip = ipaddress.ip_address(address)
+    except ValueError:
+        return True
+    mapped = getattr(ip, "ipv4_mapped", None)
+    return not (mapped or ip).is_loopback
+
+
+_CREDENTIAL = re.compile(rf"[A-Za-z0-9_\-]{{{CREDENTIAL_MIN},256}}")  # secrets.token_urlsafe's
+
+
+def usable_credential(value: str | None) -> str | None:
+    """``value`` if it can serve as a credential (URL-safe characters, long enough to be
+    unguessable), else None."""
+    if value is None or _CREDENTIAL.fullmatch(value) is None:
+        return None
+    return value
+
+
 NO_SHARED = (
-    "this server runs no shared demo (serve --no-shared-demo): open a private session with "
-    "POST /api/sessions and address it as /api/sessions/{id}/..."
+    "this server runs no shared demo (serve --no-shared-demo): a browser's page gets a private "
+    "session of its own; a script opens one with POST /api/sessions and addresses it as "
+    "/api/sessions/mine/... with the header 'Authorization: Bearer <the token it was given>'"
 )
 
 
 @dataclass
 class _Entry:
     session: SessionView
-    owner: str | None  # the browser (viser client) it belongs to; None: the API's
-    last_used: float  # time.monotonic()
+    opened_by: str  # "shared", or one of OPENED_BY
+    credential: str | None  # the secret its holder presents; None: only its scene connections
+    address: str | None  # the client address that opened it
+    last_used: float  # time.monotonic() of the last API call (or a view closing)
+    viewers: set[str] = field(default_factory=set)  # the scene connections showing it
+
+    def held_by(self, credentials: Iterable[str]) -> bool:
+        """Whether one of ``credentials`` is this session's (constant time each)."""
+        mine = self.credential
+        if mine is None:
+            return False
+        return any(hmac.compare_digest(mine.encode(), c.encode()) for c in credentials)
 
 
 class SessionRegistry:
@@ -61,9 +122,12 @@ class SessionRegistry:
         idle_s: float = 300.0,
         intent: Intent | None = None,
         initial: Intent | None = None,
+        per_address: int = PER_ADDRESS,
+        linger_s: float = LINGER_S,
     ):
         """``shared`` is the shared demo, or None (private mode only) for none; ``initial``
-        (or else ``intent``, or the shared demo's) is a private session's first intent."""
+        (or else ``intent``, or the shared demo's) is a private session's first intent;
+        ``per_address``: private sessions one client address holds at most."""
         if mode not in MODES:
             raise ValueError(f"sessions mode must be one of {', '.join(MODES)}, got {mode!r}")
         if mode == "private" and pool is None:
@@ -76,11 +140,14 @@ class SessionRegistry:
         self.mode = mode
         self.pool = pool
         self.idle_s = idle_s
+        self.per_address = per_address
+        self.linger_s = linger_s
         self._initial = first  # a private session's first intent
         self._lock = threading.Lock()
+        self._opening = threading.Lock()  # one open at a time: the address count holds
         self._entries: dict[str, _Entry] = {}
         if shared is not None:
-            self._entries[SHARED] = _Entry(shared, None, time.monotonic())
+            self._entries[SHARED] = _Entry(shared, "shared", None, None, time.monotonic())
         self._stop = threading.Event()
         self._reaper = threading.Thread(target=self._reap, name="session-reaper", daemon=True)
         self._reaper.start()
@@ -93,6 +160,7 @@ class SessionRegistry:
         pool: WorkerPool | None = None,
         idle_s: float = 300.0,
         shared_demo: bool = True,
+        per_address: int = PER_ADDRESS,
     ) -> SessionRegistry:
         """Start the shared session (in a worker, or a thread without a pool; none when
         ``shared_demo`` is False, private mode only) and the registry."""
@@ -103,7 +171,7 @@ class SessionRegistry:
             shared = LiveSim(intent.params, intent.methods, intent.speed).start()
         else:
             shared = pool.open(intent, sid=SHARED)
-        return cls(mode, shared, pool, idle_s, intent)
+        return cls(mode, shared, pool, idle_s, intent, per_address=per_address)
 
     @classmethod
     def around(cls, session: SessionView) -> SessionRegistry:
@@ -133,47 +201,134 @@ class SessionRegistry:
             entry.last_used = time.monotonic()
             return entry.session
 
-    def open_private(self, owner: str | None = None) -> tuple[str, SessionView]:
-        """A new private session (PoolFull when the workers are full)."""
+    def open_private(
+        self,
+        credential: str | None = None,
+        address: str | None = None,
+        opened_by: str = "api",
+        viewer: str | None = None,
+        beyond_limit: bool = False,
+    ) -> tuple[str, SessionView]:
+        """A new private session held by ``credential`` (None: only its ``viewer``, a scene
+        connection, sees it), opened from client ``address``. PoolFull when the workers are
+        full, AddressFull when the address holds ``per_address`` sessions already (unless
+        ``beyond_limit``: the instructor decides). A credential that holds a session already
+        gets that one back."""
         if self.mode != "private" or self.pool is None:
             raise SessionsDisabled(
                 "the server runs one shared session (start it with --sessions private)"
             )
-        # unguessable: a session is changed by whoever names it, so one student cannot
-        # address another's by counting (an instructor's listing shows them all)
-        sid = f"p-{secrets.token_urlsafe(9)}"
-        session = self.pool.open(self._initial, sid=sid)
-        with self._lock:
-            self._entries[sid] = _Entry(session, owner, time.monotonic())
+        if opened_by not in OPENED_BY:
+            raise ValueError(f"opened_by must be one of {', '.join(OPENED_BY)}")
+        if credential is not None and usable_credential(credential) is None:
+            raise ValueError(f"a credential has {CREDENTIAL_MIN} to 256 characters")
+        with self._opening:
+            mine = self.owned([credential])
+            if mine is not None:  # a holder asking again gets its own (two tabs at once)
+                return mine, self.attach(mine, viewer) if viewer else self.get(mine)
+            if not beyond_limit and limited(address):
+                with self._lock:
+                    held = sum(
+                        1
+                        for sid, e in self._entries.items()
+                        if sid != SHARED and e.address == address
+                    )
+                if held >= self.per_address:
+                    raise AddressFull(
+                        f"this address ({address}) holds {held} private session"
+                        f"{'s' if held != 1 else ''} already, the most one client may hold"
+                    )
+            # an id says which session, never who may use it (that is the credential); still
+            # unguessable, so that an id seen once tells nothing of the next
+            sid = f"p-{secrets.token_urlsafe(9)}"
+            session = self.pool.open(self._initial, sid=sid, label="a private session")
+            with self._lock:
+                entry = _Entry(session, opened_by, credential, address, time.monotonic())
+                if viewer is not None:
+                    entry.viewers.add(viewer)
+                self._entries[sid] = entry
         return sid, session
 
-    def close(self, sid: str) -> None:
-        """End a private session and free its room in the workers."""
+    def owned(self, credentials: Iterable[str | None]) -> str | None:
+        """The id of the private session one of ``credentials`` holds, or None."""
+        given = [c for c in credentials if usable_credential(c)]
+        if not given:
+            return None
+        with self._lock:
+            entries = list(self._entries.items())
+        return next((sid for sid, e in entries if e.held_by(given)), None)  # type: ignore[arg-type]
+
+    def may_use(self, sid: str, credentials: Iterable[str | None]) -> bool:
+        """Whether ``credentials`` hold private session ``sid`` (False if there is none)."""
+        given = [c for c in credentials if usable_credential(c)]
+        with self._lock:
+            entry = self._entries.get(sid)
+        return entry is not None and sid != SHARED and entry.held_by(given)  # type: ignore[arg-type]
+
+    def attach(self, sid: str, viewer: str) -> SessionView:
+        """Show session ``sid`` to one more scene connection (a reload, a second tab)."""
+        with self._lock:
+            entry = self._entries.get(sid)
+            if entry is None:
+                raise NoSuchSession(sid)
+            entry.viewers.add(viewer)
+            return entry.session
+
+    def detach(self, viewer: str) -> None:
+        """A scene connection closed: a session only it saw ends now; a page's lingers
+        ``linger_s`` (a reload gets it back)."""
+        ended = []
+        now = time.monotonic()
+        with self._lock:
+            for sid, e in self._entries.items():
+                if viewer in e.viewers:
+                    e.viewers.discard(viewer)
+                    e.last_used = now
+                    if not e.viewers and e.opened_by == "scene":
+                        ended.append(sid)
+        for sid in ended:
+            self.close(sid)
+
+    def close(self, sid: str, only_if: Callable[[_Entry], bool] = lambda _e: True) -> None:
+        """End a private session and free its room in the workers (``only_if`` its entry
+        passes, checked under the lock: the reaper's idle session may have been found again
+        by a reload meanwhile)."""
         if sid == SHARED:
             return
         with self._lock:
-            entry = self._entries.pop(sid, None)
-        if entry is not None and self.pool is not None:
+            entry = self._entries.get(sid)
+            if entry is None or not only_if(entry):
+                return
+            del self._entries[sid]
+        if self.pool is not None:
             self.pool.close(entry.session)  # type: ignore[arg-type]
 
-    def close_owned_by(self, owner: str) -> None:
-        with self._lock:
-            sids = [sid for sid, e in self._entries.items() if e.owner == owner]
-        for sid in sids:
-            self.close(sid)
+    def _idle(self, e: _Entry, now: float) -> bool:
+        """Nothing showed or used a private session for its time: an API-opened one
+        ``idle_s``, a page's ``linger_s``."""
+        limit = self.idle_s if e.opened_by == "api" else self.linger_s
+        return not e.viewers and now - e.last_used > limit
 
-    def list(self) -> list[dict]:
-        """One line per session: id, kind, owner, worker, robots, real-time factor."""
+    def list(self, reveal: Callable[[str], bool] = lambda _sid: False) -> list[dict]:
+        """One line per session the caller may see: the shared one, and the private ones
+        ``reveal(sid)`` allows (the instructor: all; a holder: its own): id, kind, who opened
+        it, from where, viewers, worker, robots, playback."""
         with self._lock:
-            entries = list(self._entries.items())
+            entries = [
+                (sid, e, len(e.viewers))
+                for sid, e in self._entries.items()
+                if sid == SHARED or reveal(sid)
+            ]
         out = []
-        for sid, e in entries:
+        for sid, e, viewers in entries:
             playback = e.session.playback()  # the same account as GET /api/state's
             out.append(
                 {
                     "id": sid,
                     "kind": "shared" if sid == SHARED else "private",
-                    "owner": e.owner,
+                    "opened_by": e.opened_by,
+                    "address": e.address,
+                    "viewers": viewers if sid != SHARED else None,  # (not counted)
                     "worker_pids": getattr(e.session, "worker_pids", []),
                     "methods": list(e.session.intent.methods),
                     "realtime_factor": playback.realtime_factor,
@@ -185,6 +340,32 @@ class SessionRegistry:
                 }
             )
         return out
+
+    def workers(self, reveal: Callable[[str], bool] = lambda _sid: False) -> builtins.list[dict]:
+        """The workers (:meth:`WorkerPool.workers`) with each robot as ``<session>/<method>``:
+        a private session's id only where ``reveal(sid)`` allows, else ``private``."""
+        if self.pool is None:
+            return []
+        out = []
+        for w in self.pool.workers():
+            robots = []
+            for part in w["robots"]:
+                sid, _, method = part.rpartition("/")
+                robots.append(part if sid == SHARED or reveal(sid) else f"private/{method}")
+            out.append({**w, "robots": sorted(robots)})
+        return out
+
+    def realtime_factor_min(self) -> float | None:
+        """The lowest real-time factor among the sessions running (paused ones left out): how
+        well the server keeps real time, told to anyone without telling whose session."""
+        with self._lock:
+            sessions = [e.session for e in self._entries.values()]
+        factors = [
+            p.realtime_factor
+            for p in (s.playback() for s in sessions)
+            if p.realtime_factor is not None and not p.paused
+        ]
+        return min(factors) if factors else None
 
     def count_private(self) -> int:
         with self._lock:
@@ -202,12 +383,10 @@ class SessionRegistry:
             now = time.monotonic()
             with self._lock:
                 idle = [
-                    sid
-                    for sid, e in self._entries.items()
-                    if sid != SHARED and e.owner is None and now - e.last_used > self.idle_s
+                    sid for sid, e in self._entries.items() if sid != SHARED and self._idle(e, now)
                 ]
             for sid in idle:
-                self.close(sid)
+                self.close(sid, only_if=lambda e: self._idle(e, time.monotonic()))
 
     def shutdown(self, stop_shared: bool = True) -> None:
         """End the private sessions (and the shared one, unless the caller owns it)."""
@@ -225,4 +404,15 @@ class SessionRegistry:
             self.pool.close(shared)  # type: ignore[arg-type]
 
 
-__all__ = ["MODES", "SHARED", "NoSuchSession", "PoolFull", "SessionRegistry", "SessionsDisabled"]
+__all__ = [
+    "LINGER_S",
+    "MODES",
+    "SHARED",
+    "AddressFull",
+    "NoSuchSession",
+    "PoolFull",
+    "SessionRegistry",
+    "SessionsDisabled",
+    "limited",
+    "usable_credential",
+]

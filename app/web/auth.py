@@ -1,5 +1,8 @@
-"""Instructor mode: with ``serve --instructor-token T`` only the instructor changes the shared
-demo; students watch it (and, with private sessions, drive their own robots).
+"""Who is who: the instructor (``serve --instructor-token T``), and the holders of private
+sessions (their seat cookie or session token).
+
+With an instructor only the instructor changes the shared demo; students watch it (and, with
+private sessions, drive their own robots).
 
 Who is the instructor:
 
@@ -13,6 +16,13 @@ Who is the instructor:
 The token is compared in constant time (:func:`hmac.compare_digest`) and never logged: the
 web server's access log is off, and :class:`RedactTokens` blanks ``token=...`` in any record
 of the loggers that could print a URL.
+
+A private session's holder (``app.live.registry``): a browser is known by its *seat cookie*
+(:data:`SEAT_COOKIE`, HttpOnly, set by the page ``/`` in private mode). Cookies belong to a
+host, not a port, so the browser sends it with the scene's websocket too
+(:func:`client_seat`), and its session follows the browser through a reload, a reconnect or a
+second tab, and answers its API calls. A script is known by the token ``POST /api/sessions``
+gave it, sent as ``Authorization: Bearer <token>``.
 """
 
 from __future__ import annotations
@@ -20,12 +30,15 @@ from __future__ import annotations
 import hmac
 import logging
 import re
+import secrets
+from http.cookies import CookieError, SimpleCookie
 from typing import Any
 from urllib.parse import parse_qs, urlsplit
 
 from fastapi.security import HTTPBearer
 
 TOKEN_PARAM = "token"
+SEAT_COOKIE = "pelvic_walk_seat"  # a browser's credential for its private session
 _TOKEN_IN_TEXT = re.compile(r"(token=)[^&\s\"']+", re.IGNORECASE)
 _BEARER_IN_TEXT = re.compile(r"(bearer\s+)\S+", re.IGNORECASE)
 URL_LOGGERS = (  # a logger's filters see only its own records, not its children's
@@ -38,14 +51,21 @@ URL_LOGGERS = (  # a logger's filters see only its own records, not its children
 )
 
 
-# The API's bearer credential: with an instructor, changing the shared session (and listing the
-# private sessions' ids) needs the token; reading needs nothing.
+# The API's bearer credential: the instructor's token (with an instructor, changing the shared
+# session needs it; it reaches every private session too), or a private session's token (given
+# once, by POST /api/sessions). Reading the shared session needs nothing.
 BEARER = HTTPBearer(
     auto_error=False,
-    description="With an instructor (serve --instructor-token), changing the shared session "
-    "and seeing private sessions' ids need the token as a bearer credential; reading needs "
-    "nothing.",
+    description="The instructor's token (serve --instructor-token: changing the shared "
+    "session needs it, and it reaches every private session), or a private session's token "
+    "(POST /api/sessions answers with it once). A browser's page sends its seat cookie "
+    "instead. Reading the shared session needs nothing.",
 )
+
+
+def new_credential() -> str:
+    """A fresh secret for a seat cookie or a session token (256 bits)."""
+    return secrets.token_urlsafe(32)
 
 
 class Instructor:
@@ -71,19 +91,54 @@ class Instructor:
         return f"Instructor(enabled={self.enabled})"
 
 
-def client_token(server: Any, client: Any) -> str | None:
-    """The ``token`` query parameter of the websocket a viser client connected with, or None.
-
-    viser keeps the connection's request (the websockets library's ``ServerConnection``) only
-    in a private table, so this reads it defensively: any change there reads as "no token"
-    (the browser is then a student), never as an error."""
+def _connection(server: Any, client: Any) -> Any:
+    """The websocket connection (the websockets library's ``ServerConnection``) a viser client
+    came in on, or None. viser keeps it only in a private table, so this reads it defensively:
+    any change there reads as "nothing known" (a student without a seat), never as an error."""
     try:
-        conn = server._websock_server._live_connections[client.client_id]
-        path = conn.request.path
+        return server._websock_server._live_connections[client.client_id]
     except (AttributeError, KeyError, TypeError):
+        return None
+
+
+def client_token(server: Any, client: Any) -> str | None:
+    """The ``token`` query parameter of the websocket a viser client connected with, or None."""
+    try:
+        path = _connection(server, client).request.path
+    except AttributeError:
         return None
     values = parse_qs(urlsplit(path).query).get(TOKEN_PARAM)
     return values[0] if values else None
+
+
+def seat_of(cookie_header: str | None) -> str | None:
+    """The seat cookie's value in a ``Cookie`` header, or None (none, or malformed)."""
+    if not cookie_header:
+        return None
+    try:
+        jar: SimpleCookie = SimpleCookie()
+        jar.load(cookie_header)
+    except CookieError:
+        return None
+    morsel = jar.get(SEAT_COOKIE)
+    return morsel.value if morsel is not None and morsel.value else None
+
+
+def client_seat(server: Any, client: Any) -> str | None:
+    """The seat cookie the browser of a viser client sent with its websocket, or None."""
+    try:
+        headers = _connection(server, client).request.headers
+        return seat_of(headers.get("Cookie"))
+    except AttributeError:
+        return None
+
+
+def client_address(server: Any, client: Any) -> str | None:
+    """The network address a viser client connected from, or None."""
+    try:
+        return str(_connection(server, client).remote_address[0])
+    except (AttributeError, IndexError, TypeError):
+        return None
 
 
 def redact(text: str) -> str:

@@ -215,20 +215,28 @@ class LearnTab:
             session.resume()
         intent = session.reset()
         run = _RUNS[session] = LessonRun(lesson, intent.start_clock)
-        self._adopt(run)
+        self._adopt(run, camera_moved=client is not None)
         # The view is fitted to the robots shown: set it once the scene shows the lesson's.
         self._camera = (run, lesson.view, client)
 
-    def _adopt(self, run: LessonRun) -> None:
+    def _adopt(self, run: LessonRun, camera_moved: bool = False) -> None:
         """Show the session's lesson ``run``: its head and text now, its numbers as the
-        robots restart."""
+        robots restart. ``camera_moved``: this view's camera is set to the lesson's view (the
+        browser that pressed the button); every other view keeps its own and is told which
+        view the lesson is seen best from."""
         lesson = run.lesson
         self.run = run
         self._shown_time = -math.inf
+        camera = (
+            f"camera: {lesson.view}"
+            if camera_moved
+            else f"best seen from the camera view <i>{lesson.view}</i> (Controls tab, View: "
+            "yours stays where you put it)"
+        )
         self.head.content = (
             f'<div style="font: 13px/1.45 sans-serif"><b>{html.escape(lesson.title)}</b><br/>'
-            f'<span style="color:#5f6368">Paper: {html.escape(lesson.paper)}; camera: '
-            f"{lesson.view}</span></div>"
+            f'<span style="color:#5f6368">Paper: {html.escape(lesson.paper)}; {camera}'
+            "</span></div>"
         )
         self.text.content = (
             f'<div style="font: 13px/1.45 sans-serif"><p style="margin:4px 0">{lesson.watch}</p>'

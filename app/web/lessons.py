@@ -135,11 +135,12 @@ LESSONS: tuple[Lesson, ...] = (
         {"step_length": 0.40, "step_time": 1.2},
         ("mpc",),
         "top",
-        "Press <b>Pause</b> while both feet are down (phase <i>DSP</i> in the table above), or "
-        "<b>Step: to lift-off</b>, and open the <b>Inspect</b> tab: the reference angle "
+        "Press <b>Pause</b> while both feet are down (phase <i>DSP</i> in the table above) "
+        "and open the <b>Inspect</b> tab: the reference angle "
         "(eq. 30-31) already sees the next footholds over the 1.6 s horizon, and the MPC's "
         "plan (eq. 37) turns the pelvis toward the coming swing before the foot lifts (its "
-        "rate reverses in the DSP). "
+        "rate reverses in the DSP). <b>Step: to lift-off</b> stops at the first instant the "
+        "foot is off the ground (phase <i>SSP</i>): the turn the plan made before it. "
         "The table above is read from the frame shown (paused, the paused instant): the "
         "planned angle now and at the end of the horizon, and the waist rate now.",
         ("30", "31", "37"),

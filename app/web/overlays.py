@@ -99,12 +99,32 @@ def legend_html() -> str:
     )
 
 
-class Overlay:
-    """One handle for all robots' overlay of one kind, re-sent only when its data changed."""
+def vertex_colors(color: tuple[int, int, int], n: int) -> np.ndarray:
+    """(n, 2, 3) uint8: one colour at both ends of ``n`` line segments."""
+    return np.tile(np.asarray(color, np.uint8), (n, 2, 1))
 
-    def __init__(self, handle: Any):
+
+class Overlay:
+    """One handle for all robots' overlay of one kind, re-sent only when its data changed.
+
+    Line segments always carry a colour per vertex (:meth:`lines`), from their creation on:
+    viser's client builds a line's shader for one colour or for per-vertex colours when it
+    first draws the line and keeps that form, so a line created with one colour and given
+    per-vertex colours later is drawn white on a page that drew it in between (a page that
+    joined before the first frame, or replayed the scene's messages in two batches)."""
+
+    def __init__(self, handle: Any, color: tuple[int, int, int] | None = None):
         self.handle = handle
+        self.color = color  # a line overlay's one colour (sent per vertex)
         self._last: dict[str, Any] = {}
+
+    def lines(self, points: np.ndarray, colors: np.ndarray | None = None) -> None:
+        """Set line segments (N, 2, 3) and their colours per vertex (default: the overlay's
+        colour at every vertex)."""
+        if colors is None:
+            assert self.color is not None, "a line overlay without its own colour"
+            colors = vertex_colors(self.color, len(points))
+        self.set(points=points, colors=colors)
 
     def set(self, **props: Any) -> None:
         for attr, value in props.items():

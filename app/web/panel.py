@@ -111,11 +111,12 @@ class ControlPanel:
         )
         # viser greys a disabled slider but not the number box beside it, which then looks
         # as if typing in it would act: grey that box too and let it take no clicks
-        gui.add_html(DISABLED_SLIDER_STYLE)
+        style = gui.add_html(DISABLED_SLIDER_STYLE)
         self.notice = gui.add_markdown(notice)
         self.notice.visible = bool(notice)
         self.status = gui.add_markdown("starting...")
         tabs = gui.add_tab_group()
+        self._top = (style, self.notice, self.status, tabs)  # everything else is inside
         with tabs.add_tab("Controls", viser.Icon.ADJUSTMENTS):
             self._build_controls()
         with tabs.add_tab("Inspect", viser.Icon.CHART_LINE):
@@ -131,6 +132,13 @@ class ControlPanel:
     @property
     def session(self):
         return self.view.session
+
+    def hide(self) -> None:
+        """Hide the whole panel (a new one replaces it on the same page). Hidden, not removed:
+        viser's client applies a batch's updates after its removals, so updates sent just
+        before a removal would fail on the page as "Tried to update non-existent component"."""
+        for handle in self._top:
+            handle.visible = False
 
     # -- building ------------------------------------------------------------------------
     def guarded(self) -> bool:

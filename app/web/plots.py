@@ -31,11 +31,9 @@ PLOTS: tuple[tuple[str, str, tuple[float, float]], ...] = (  # (row column, titl
     ("waist_deg", "Waist yaw [deg]", (-30.0, 30.0)),
     ("waist_rate_deg_s", "Waist yaw rate [deg/s]", (-60.0, 60.0)),
     ("yaw_momentum", "Yaw momentum [kg m^2/s]", (-0.5, 0.5)),
-    (
-        "kappa_legs",
-        "kappa(J) of the leg columns (eq. 45), log scale; dashed: knee nearly straight",
-        (1.0, 10 * KAPPA_SINGULAR),
-    ),
+    # (short: a title wider than the panel runs under the plot's expand button; the legend
+    # names the dashed line)
+    ("kappa_legs", "kappa(J) of the legs, log (eq. 45)", (1.0, 10 * KAPPA_SINGULAR)),
     ("energy_two_step", "Energy per two steps [J] (eq. 44, as Table 1)", (0.0, 100.0)),
 )
 LOG_PLOTS = {"kappa_legs"}  # drawn on a log10 axis: a straight knee's 1e8 beside a clean 30
@@ -43,6 +41,8 @@ LOG_MAX = 1e12  # the log axis's top at most (kappa is finite but unbounded at a
 # the legends name the lines only: uPlot's live values ("--" until the pointer is on the
 # plot) left gaps after every name in a narrow panel
 LEGEND = viser.uplot.Legend(show=True, live=False)
+LIVE_X = viser.uplot.Axis(label="t - now [s]")  # the x axes say what they count
+HORIZON_X = viser.uplot.Axis(label="t from now [s]")
 
 
 def css(rgb: tuple[int, int, int], alpha: float = 1.0) -> str:
@@ -113,7 +113,13 @@ class LivePlots:
             "sought, the plots end there)."
         )
         self.folder = gui.add_folder("Plots", expand_by_default=True)
-        self.handles: dict[str, Any] = {}
+        self.handles: dict[str, Any] = {}  # the plots shown: column -> handle
+        # every set of plots made, by robots shown: a change of robots hides one set and shows
+        # (or makes) another, and never removes one. (viser's client applies a batch's
+        # property updates after its removals: an update sent just before a removal fails on
+        # the page as "Tried to update non-existent component", a starved page's batch holding
+        # several of them.)
+        self._sets: dict[tuple[str, ...], dict[str, Any]] = {}
         self._scales: dict[str, tuple] = {}
         self._methods: tuple[str, ...] = ()
         self._last: tuple[float, float] | None = None  # (frame clock, wall time of update)
@@ -171,12 +177,27 @@ class LivePlots:
                     "y": y_scale,
                 }
                 if log:
-                    handle.axes = (viser.uplot.Axis(), log_axis(lo, hi))
+                    handle.axes = (LIVE_X, log_axis(lo, hi))
 
     def _build(self, methods: tuple[str, ...]) -> None:
-        for handle in self.handles.values():
-            handle.remove()
-        self.handles = {}
+        """Show the plots of these robots (made the first time), hide the others."""
+        for shown, handles in self._sets.items():
+            if shown != methods:
+                for handle in handles.values():
+                    if handle.visible:
+                        handle.visible = False
+        if methods in self._sets:
+            self.handles = self._sets[methods]
+            for handle in self.handles.values():
+                handle.visible = True
+        else:
+            self.handles = self._sets[methods] = self._make(methods)
+        self._methods = methods
+        self._scales = {}
+        self._last = None
+
+    def _make(self, methods: tuple[str, ...]) -> dict[str, Any]:
+        handles: dict[str, Any] = {}
         robots = tuple(
             viser.uplot.Series(
                 label=METHOD_INFO[m].title, stroke=css(METHOD_INFO[m].color), width=2
@@ -205,17 +226,16 @@ class LivePlots:
                 kappa = col == "kappa_legs"
                 series = (x_axis, *robots, *((singular,) if kappa else ()), dsp(col in LOG_PLOTS))
                 empty = tuple(np.ones(2, dtype=np.float32) for _ in series)
-                self.handles[col] = self.gui.add_uplot(
+                handles[col] = self.gui.add_uplot(
                     data=empty,
                     series=series,
                     title=title,
                     aspect=2.0,
                     scales={"x": viser.uplot.Scale(time=False, range=(-WINDOWS_S[0], 0.0))},
+                    axes=(LIVE_X, viser.uplot.Axis()),
                     legend=LEGEND,
                 )
-        self._methods = methods
-        self._scales = {}
-        self._last = None
+        return handles
 
 
 class HorizonInspector:
@@ -241,6 +261,7 @@ class HorizonInspector:
                 viser.uplot.Series(label="right foot x (plan)", stroke=plan, width=2, dash=(6, 4)),
             ),
             aspect=2.0,
+            axes=(HORIZON_X, viser.uplot.Axis()),
             legend=LEGEND,
         )
         self.zmp = gui.add_uplot(
@@ -255,6 +276,7 @@ class HorizonInspector:
                 viser.uplot.Series(label="max", stroke=plan, width=1),
             ),
             aspect=2.0,
+            axes=(HORIZON_X, viser.uplot.Axis()),
             legend=LEGEND,
         )
         self.theta = gui.add_uplot(
@@ -267,6 +289,7 @@ class HorizonInspector:
                 viser.uplot.Series(label="theta_ref (eq. 33)", stroke=ref, width=2, dash=(8, 5)),
             ),
             aspect=2.0,
+            axes=(HORIZON_X, viser.uplot.Axis()),
             legend=LEGEND,
         )
         self.theta_note = gui.add_markdown("")

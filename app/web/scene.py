@@ -66,6 +66,7 @@ from app.web.overlays import (
     seg_array,
     stick_segments,
     swing_path,
+    vertex_colors,
 )
 from app.web.robot_meshes import RobotMeshes
 from models.dyros_jet import FOOT_SIZE
@@ -121,9 +122,16 @@ class SceneView:
             "sticks": (grey, 3.0),
             "falls": (DANGER, 6.0),
         }
-        self.ov = {
+        self.ov = {  # colours per vertex from the start (Overlay says why)
             k: Overlay(
-                sc.add_line_segments(f"/world/{k}", seg, c, thickness=t, thickness_units="screen")
+                sc.add_line_segments(
+                    f"/world/{k}",
+                    seg,
+                    vertex_colors(c, len(seg)),
+                    thickness=t,
+                    thickness_units="screen",
+                ),
+                c,
             )
             for k, (c, t) in lines.items()
         }
@@ -315,10 +323,10 @@ class SceneView:
                     holds = r.plan.footholds()
                     near = np.abs(holds[:, 0] - r.com[0]) < FOOTHOLD_WINDOW
                     parts.append(rectangle_segments(holds[near, :2] + yi, FOOT_SIZE, FLOOR_Z))
-                ov["footholds"].set(points=seg_array(parts))
+                ov["footholds"].lines(seg_array(parts))
         if on["support"]:
-            ov["support"].set(
-                points=seg_array(
+            ov["support"].lines(
+                seg_array(
                     [
                         polyline_segments(
                             np.column_stack([r.support + yi, np.full(len(r.support), FLOOR_Z)]),
@@ -338,12 +346,10 @@ class SceneView:
                     for pair in robot_prediction(r, yi)
                 ]
             )
-            ov["prediction"].set(points=pred_pts, colors=pred_cols)
+            ov["prediction"].lines(pred_pts, pred_cols)
         if on["falls"]:
-            ov["falls"].set(
-                points=seg_array(
-                    [fall_ring(r, yi) for r, yi in zip(robots, y, strict=True) if r.fell]
-                )
+            ov["falls"].lines(
+                seg_array([fall_ring(r, yi) for r, yi in zip(robots, y, strict=True) if r.fell])
             )
         if on["zmp"]:
             pts, cols = [], []
@@ -357,8 +363,8 @@ class SceneView:
             if pts:
                 ov["zmp"].set(points=np.array(pts, np.float32), colors=np.array(cols, np.uint8))
         if on["swing"]:
-            ov["swing"].set(
-                points=seg_array([swing_path(r, yi) for r, yi in zip(robots, y, strict=True)])
+            ov["swing"].lines(
+                seg_array([swing_path(r, yi) for r, yi in zip(robots, y, strict=True)])
             )
         if on["momentum"]:
             arrows = []
@@ -376,9 +382,7 @@ class SceneView:
                 ]
             )
             colors = np.array([reach_color(v) for r in robots for v in r.reach], np.uint8)
-            ov["reach"].set(
-                points=legs.astype(np.float32), colors=np.repeat(colors[:, None, :], 2, axis=1)
-            )
+            ov["reach"].lines(legs.astype(np.float32), np.repeat(colors[:, None, :], 2, axis=1))
         if self.sticks and kept is not None:
             key = tuple((id(r.plan), r.step_index) for r in robots)
             if self._keys.get("sticks") != key:
@@ -390,7 +394,7 @@ class SceneView:
                         seg = seg + (*yi, 0.0)
                         sticks += [(seg[:3], STICK_START), (seg[3:], STICK_END)]
                 stick_pts, stick_cols = colored(sticks)
-                ov["sticks"].set(points=stick_pts, colors=stick_cols)
+                ov["sticks"].lines(stick_pts, stick_cols)
 
 
 STAGGER_STEP = 0.5  # [m] the cameras are fitted again when the robots' stagger crosses these
@@ -476,7 +480,13 @@ def label_text(r: RobotFrame, frame: LiveFrame) -> str:
     if r.strategy_ms > SLOW_STRATEGY_MS:
         head = f"{head} · slow: {r.strategy_ms:.0f} ms a tick"
     return (
-        f"{head} · {r.status}\nstep {max(r.step_index, 0)} · {r.step_length:.2f} m · "
-        f"waist {math.degrees(r.waist_angle):+.0f}°\nreach left {reach[0]:.2f} · right "
-        f"{reach[1]:.2f}"
+        f"{head} · {r.status}\nstep {max(r.step_index, 0)} · {shown(r.step_length, '.2f')} m · "
+        f"waist {shown(math.degrees(r.waist_angle), '+.0f')}°\nreach left "
+        f"{shown(reach[0], '.2f')} · right {shown(reach[1], '.2f')}"
     )
+
+
+def shown(value: float, spec: str) -> str:
+    """A number for a label, or a dash until it exists (a robot that has not ticked since
+    its restart has no reach yet: NaN)."""
+    return format(value, spec) if math.isfinite(value) else "–"

@@ -18,7 +18,8 @@ scene is sent a little later, instead of every viewer slowing the robots down.
 
 ``--sessions shared`` (the default) shows one session to every browser; ``--sessions private``
 gives each browser its own while the workers have room (``--robots-per-worker``), beside the
-shared demo unless ``--no-shared-demo``. ``--instructor-token`` puts one person in charge of
+shared demo unless ``--no-shared-demo``, at most ``--sessions-per-address`` to one client
+address (:mod:`app.live.registry`). ``--instructor-token`` puts one person in charge of
 the shared demo (:mod:`app.web.auth`); the web server's access log stays off, so no URL (and no
 ``?token=``) is logged.
 
@@ -130,6 +131,7 @@ def serve(
     shared_demo: bool | None = None,
     instructor_token: str | None = None,
     strategies: list[str] | None = None,
+    sessions_per_address: int | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
@@ -153,6 +155,7 @@ def serve(
         "idle_timeout": idle_timeout,
         "shared_demo": shared_demo,
         "instructor_token": instructor_token,
+        "sessions_per_address": sessions_per_address,
     }
     try:  # the command line over the environment over the defaults, checked in one place
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
@@ -195,7 +198,12 @@ def serve(
 
     pool = WorkerPool(workers, robots_per_worker, display_hz).start() if workers else None
     registry = SessionRegistry.start(
-        sessions, intent, pool, idle_timeout, shared_demo=settings.shared_demo
+        sessions,
+        intent,
+        pool,
+        idle_timeout,
+        shared_demo=settings.shared_demo,
+        per_address=settings.sessions_per_address,
     )
     display = Display(viser_server, registry, display_hz, instructor).start()
     app = create_app(

@@ -4,9 +4,10 @@
 ``PELVIC_WALK_HOST``, ``PELVIC_WALK_PORT``, ``PELVIC_WALK_VISER_PORT``,
 ``PELVIC_WALK_REPORT_DIR``, ``PELVIC_WALK_WORKERS``, ``PELVIC_WALK_SESSIONS``,
 ``PELVIC_WALK_ROBOTS_PER_WORKER``, ``PELVIC_WALK_DISPLAY_HZ``, ``PELVIC_WALK_DISPLAY_NICE``,
-``PELVIC_WALK_IDLE_TIMEOUT``, ``PELVIC_WALK_SHARED_DEMO`` and ``PELVIC_WALK_INSTRUCTOR_TOKEN``
-override the defaults; command-line options override both. (The environment keeps the token
-out of the process list, where ``--instructor-token`` shows.)
+``PELVIC_WALK_IDLE_TIMEOUT``, ``PELVIC_WALK_SHARED_DEMO``, ``PELVIC_WALK_SESSIONS_PER_ADDRESS``
+and ``PELVIC_WALK_INSTRUCTOR_TOKEN`` override the defaults; command-line options override
+both. (The environment keeps the token out of the process list, where ``--instructor-token``
+shows.)
 """
 
 from __future__ import annotations
@@ -78,6 +79,9 @@ class Settings(BaseSettings):
     # private mode: run the shared demo (it holds its robots' worker slots) or not (every slot
     # for the students' private sessions)
     shared_demo: bool = True
+    # private mode: sessions one client address holds at most (its browsers' and scripts'
+    # together), so no one client takes every seat; the server's own machine is not limited
+    sessions_per_address: int = Field(default=1, ge=1, le=1000)
     # with it, only the instructor (the page opened with ?token=..., the API with
     # "Authorization: Bearer ...") changes the shared demo; SecretStr: never printed
     instructor_token: SecretStr | None = Field(default=None, min_length=1)

@@ -6,9 +6,16 @@
   shared session (viser's per-client scene and GUI): the instructor's (the page opened with
   ``?token=``) drives it, the students' are read-only, with a line saying so.
 - In ``private`` mode each browser gets its own view (viser's per-client scene and GUI) on its
-  own session, opened when it connects and ended when it disconnects (freeing its worker).
-  When the workers are full, the browser's view shows the shared demo with a one-line notice
-  (read-only with an instructor), or, without a shared demo, only that notice. With an
+  own session. A browser that brings its page's seat cookie (:func:`app.web.auth.client_seat`)
+  gets the session that cookie holds, opened at its first connection and found again on a
+  reload, a reconnect or a second tab; it ends a while after its last view closed
+  (:data:`app.live.registry.LINGER_S`). A scene connected without a page's cookie gets a
+  session of its own that ends with the connection. Each view is built on its own client: no
+  other browser receives its scene or GUI.
+  When the workers are full (or the browser's address holds its share), the browser's view
+  shows the shared demo with a notice (read-only with an instructor), or, without a shared
+  demo, only that notice; it waits in line, and the display gives it a session of its own as
+  soon as one fits (:meth:`Display._admit_waiting`), first come first served. With an
   instructor, the instructor's browser gets the shared demo instead of a private session.
 
 The display thread draws each view's *shown* frame (the latest, or the sought one while
@@ -19,6 +26,7 @@ sent only what changed, at a rate they can use.
 from __future__ import annotations
 
 import logging
+import math
 import threading
 import time
 from typing import Any
@@ -26,9 +34,9 @@ from typing import Any
 import mujoco
 
 from app.live.pool import PoolFull
-from app.live.registry import SessionRegistry
+from app.live.registry import AddressFull, SessionRegistry, usable_credential
 from app.live.session import SessionView
-from app.web.auth import Instructor, client_token
+from app.web.auth import Instructor, client_address, client_seat, client_token
 from app.web.panel import ControlPanel
 from app.web.scene import SceneView
 from models.dyros_jet import SCENE_XML
@@ -36,6 +44,8 @@ from models.dyros_jet import SCENE_XML
 log = logging.getLogger(__name__)
 DISPLAY_HZ = 20.0  # scene updates per second at most (--display-hz)
 ALERT_S = 300.0  # [s] a worker's death is shown this long
+ADMIT_EVERY_S = 1.0  # [s] how often the display looks for room for the browsers in line
+OWN = "**Your own session**: these robots and every control here are yours alone."
 
 
 class View:
@@ -99,10 +109,23 @@ class NoticeOnly:
     def __init__(self, client: Any, notice: str):
         self.target = client
         client.gui.configure_theme(dark_mode=False, show_logo=False, show_share_button=False)
-        client.gui.add_markdown(notice)
+        self.notice = client.gui.add_markdown(notice)
 
     def draw(self, now: float) -> None:
         """Nothing moves."""
+
+    def hide(self) -> None:
+        self.notice.visible = False
+
+
+class _Waiting:
+    """A browser in line for a private session: what it brought, and why it waits."""
+
+    def __init__(self, client: Any, seat: str | None, address: str | None, for_room: bool):
+        self.client = client
+        self.seat = seat
+        self.address = address
+        self.for_room = for_room  # waits for room in the workers (else for its address)
 
 
 class Display:
@@ -122,6 +145,8 @@ class Display:
         self.hz = hz
         self._lock = threading.Lock()
         self.views: dict[Any, View | NoticeOnly] = {}
+        self.waiting: dict[Any, _Waiting] = {}  # client id -> in line (first come first)
+        self._admitted_at = -math.inf
         self.refused = 0  # browsers told the workers were full
         if registry.mode == "shared" and not self.instructor.enabled:
             self.views[None] = View(server, registry.shared, registry)
@@ -144,40 +169,123 @@ class Display:
                 if drives:
                     notice = "**Instructor**: you drive the shared demo every student watches."
             else:
+                seat = usable_credential(client_seat(self.server, client))
+                address = client_address(self.server, client)
                 try:
-                    _sid, session = registry.open_private(owner=owner)
-                    notice = (
-                        "**Your own session**: these robots and every control here are yours alone."
-                    )
-                except PoolFull:
+                    if self._in_line() and (seat is None or registry.owned([seat]) is None):
+                        raise PoolFull("browsers wait in line for room")  # first come first
+                    session = self._open(owner, seat, address)
+                    notice = OWN
+                except (PoolFull, AddressFull) as exc:
                     self.refused += 1
-                    n = registry.count_private()
-                    full = f"**{n} private sessions run, as many as the workers hold**"
+                    waiting = _Waiting(client, seat, address, isinstance(exc, PoolFull))
+                    with self._lock:
+                        self.waiting[client.client_id] = waiting
+                    notice, read_only = self._refusal(exc)
                     if not registry.has_shared:
-                        self._add(
-                            client, NoticeOnly(client, f"{full}: reload this page when one ends.")
-                        )
+                        self._add(client, NoticeOnly(client, notice))
                         return
                     session = registry.shared
-                    read_only = instructor.enabled
-                    notice = f"{full}: you are watching the shared demo" + (
-                        "." if read_only else " (your changes act on it too)."
-                    )
             view = View(client, session, registry, notice, read_only=read_only)
         except Exception:  # noqa: BLE001 - a browser that left while its view was built
-            log.exception("could not build the view of client %s", owner)
-            registry.close_owned_by(owner)
+            log.exception("could not build the view of a browser")
+            self._forget(client)
             return
         self._add(client, view)
+
+    def _in_line(self) -> bool:
+        """Whether browsers wait for room in the workers (a newcomer queues behind them)."""
+        with self._lock:
+            return any(w.for_room for w in self.waiting.values())
+
+    def _open(self, owner: str, seat: str | None, address: str | None) -> SessionView:
+        """The browser's own session: the one its seat cookie holds, or a new one (PoolFull,
+        AddressFull)."""
+        registry = self.registry
+        if seat is not None:
+            sid = registry.owned([seat])
+            if sid is not None:
+                return registry.attach(sid, owner)
+        _sid, session = registry.open_private(
+            credential=seat, address=address, opened_by="page" if seat else "scene", viewer=owner
+        )
+        return session
+
+    def _refusal(self, exc: Exception) -> tuple[str, bool]:
+        """(the notice of a browser in line, whether its view of the shared demo is
+        read-only)."""
+        registry = self.registry
+        read_only = self.instructor.enabled
+        if isinstance(exc, AddressFull):
+            why = (
+                "**Your computer holds a private session already** (one an address: "
+                "`serve --sessions-per-address`)"
+            )
+            when = (
+                f"this page gets robots of its own {registry.linger_s:g} s after that "
+                "session's page closes"
+            )
+        else:
+            n = registry.count_private()
+            why = f"**{n} private sessions run, as many as the workers hold**"
+            when = "this page gets robots of its own as soon as a place frees (no reload needed)"
+        if not registry.has_shared:
+            return f"{why}: {when}.", read_only
+        watching = "you are watching the shared demo" + (
+            "" if read_only else " (your changes act on it too)"
+        )
+        return f"{why}: {watching}; {when}.", read_only
+
+    def _admit_waiting(self, now: float) -> None:
+        """Give the browsers in line a session of their own while one fits, first come first
+        served: a new view (scene and panel) on the same page, no reload."""
+        if now - self._admitted_at < ADMIT_EVERY_S:
+            return
+        self._admitted_at = now
+        with self._lock:
+            line = list(self.waiting.values())
+        for waiting in line:
+            client = waiting.client
+            owner = str(client.client_id)
+            try:
+                session = self._open(owner, waiting.seat, waiting.address)
+            except AddressFull:
+                continue  # its address's other session still runs; the next one may fit
+            except PoolFull:
+                return
+            with self._lock:
+                gone = self.waiting.pop(client.client_id, None) is None
+                old = self.views.pop(client.client_id, None)  # drawn no more
+            if gone:  # it left meanwhile
+                self.registry.detach(owner)
+                continue
+            try:
+                # the old panel is hidden, not removed (ControlPanel.hide says why); the scene
+                # is rebuilt (a scene node's late update is only a note on the page)
+                if isinstance(old, View):
+                    old.panel.hide()
+                elif old is not None:
+                    old.hide()
+                client.scene.reset()
+                view = View(client, session, self.registry, OWN)
+            except Exception:  # noqa: BLE001 - a browser that left while its view was built
+                log.exception("could not build the view of a browser")
+                self._forget(client)
+                continue
+            self._add(client, view)
 
     def _add(self, client: Any, view: View | NoticeOnly) -> None:
         with self._lock:
             self.views[client.client_id] = view
 
-    def _disconnect(self, client: Any) -> None:
+    def _forget(self, client: Any) -> None:
         with self._lock:
             self.views.pop(client.client_id, None)
-        self.registry.close_owned_by(str(client.client_id))
+            self.waiting.pop(client.client_id, None)
+        self.registry.detach(str(client.client_id))
+
+    def _disconnect(self, client: Any) -> None:
+        self._forget(client)
 
     # -- the thread ------------------------------------------------------------------------
     def start(self) -> Display:
@@ -195,6 +303,11 @@ class Display:
             t0 = time.perf_counter()
             with self._lock:
                 views = list(self.views.values())
+            if self.waiting:
+                try:
+                    self._admit_waiting(t0)
+                except Exception:  # noqa: BLE001 - must not kill the display either
+                    log.exception("admitting a browser in line failed")
             for view in views:
                 try:
                     view.draw(t0)
@@ -205,10 +318,11 @@ class Display:
 
     def health(self) -> dict[str, Any]:
         with self._lock:
-            n = len(self.views)
+            n, waiting = len(self.views), len(self.waiting)
         return {
             "display_hz": self.hz,
             "views": n,
             "viewers_refused": self.refused,
+            "viewers_waiting": waiting,
             "display_running": self._thread is not None and self._thread.is_alive(),
         }

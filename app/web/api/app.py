@@ -6,7 +6,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from fastapi import FastAPI
+from fastapi import Depends, FastAPI
 from fastapi.exceptions import RequestValidationError
 
 from app.live.registry import SessionRegistry
@@ -17,7 +17,7 @@ from app.web.api.live import session_router
 from app.web.api.pages import mount_docs_assets, pages_router
 from app.web.api.recording import recording_router
 from app.web.api.runs import RunManager, runs_router
-from app.web.api.sessions import resolvers, sessions_router
+from app.web.api.sessions import Caller, caller_of, resolvers, reveal_to, sessions_router
 from app.web.api.strategies import strategies_router
 from app.web.auth import Instructor
 from controller.params import GROUPS, ControllerParams, spec
@@ -52,7 +52,9 @@ def create_app(
         description="Humanoid walking with pelvic rotation planned by MPC: the live teaching "
         "tool's API. The 3-D scene is served by viser on its own port. Session-scoped routes "
         "act on the shared session unless an `X-Pelvic-Session` header or the "
-        "`/api/sessions/{sid}/...` prefix names another.",
+        "`/api/sessions/{sid}/...` prefix names another (`mine`: your own private session). "
+        "A private session answers only to its holder (a browser's seat cookie, or the "
+        "bearer token POST /api/sessions gave) and to the instructor's bearer token.",
         version="0.1.0",
         docs_url=None,  # served by pages_router from local files: the default uses a CDN
         redoc_url=None,
@@ -64,15 +66,18 @@ def create_app(
     app.add_exception_handler(RequestValidationError, validation_handler)  # type: ignore[arg-type]
 
     health = router("/api", "health")
+    caller = caller_of(instructor)
+    Who = Depends(caller)
 
     @health.get("/health")
-    def get_health() -> dict[str, Any]:
-        """``ok`` while every session's loop runs; workers and their deaths, if any."""
+    def get_health(who: Caller = Who) -> dict[str, Any]:
+        """``ok`` while every session's loop runs; workers and their deaths, if any (a
+        worker's robots name a private session only to its holder and the instructor)."""
         shared = registry.shared if registry.has_shared else None
         frame = shared.frame() if shared is not None else None
         pool = registry.pool
         deaths = [d.describe() for d in pool.deaths[-5:]] if pool is not None else []
-        workers = pool.workers() if pool is not None else []
+        workers = registry.workers(reveal_to(registry, who))
         shared_ok = shared is None or (shared.running and shared.error is None)
         healthy = shared_ok and all(w["alive"] for w in workers)
         out = {
@@ -93,23 +98,28 @@ def create_app(
             out.update(health_extra())
         return finite(out)
 
-    @health.get("/params/spec", tags=["params"])
+    spec_router = router("/api", "params")  # (its own router: tagged once in /docs)
+
+    @spec_router.get("/params/spec")
     def get_params_spec() -> dict[str, Any]:
         """Ranges, steps, units, defaults and paper values of every parameter
         (controller/params.py, the one source of them)."""
         defaults = ControllerParams()
         return finite({g: spec(getattr(defaults, g)) for g in GROUPS})
 
-    by_header, by_path = resolvers(registry)
+    by_header, by_path = resolvers(registry, caller)
 
     def reports() -> ReportChoice:
         return choose_report(report_dir)
 
     for r in (
         health,
-        session_router("/api", by_header, instructor),
-        sessions_router(registry, instructor),
-        session_router("/api/sessions/{sid}", by_path, instructor),
+        spec_router,
+        session_router("/api", by_header, instructor, private=registry.mode == "private"),
+        sessions_router(registry, instructor, caller),
+        session_router(
+            "/api/sessions/{sid}", by_path, instructor, private=registry.mode == "private"
+        ),
         recording_router("/api", by_header),
         recording_router("/api/sessions/{sid}", by_path),
         runs_router(runs),

@@ -12,6 +12,7 @@ import email.message
 import json
 import math
 from collections.abc import Callable, Coroutine
+from enum import Enum
 from pathlib import Path
 from typing import Any
 
@@ -126,9 +127,11 @@ class JsonBodyRoute(APIRoute):
         return checked
 
 
-def router(prefix: str = "", tag: str = "pages", **kw: Any) -> APIRouter:
-    """A router whose routes take JSON bodies only."""
-    return APIRouter(prefix=prefix, tags=[tag], route_class=JsonBodyRoute, **kw)
+def router(prefix: str = "", tag: str | None = "pages", **kw: Any) -> APIRouter:
+    """A router whose routes take JSON bodies only. ``tag``: its routes' heading in /docs
+    (None: each route names its own; /docs lists an operation under every tag it has)."""
+    tags: list[str | Enum] = [tag] if tag is not None else []
+    return APIRouter(prefix=prefix, tags=tags, route_class=JsonBodyRoute, **kw)
 
 
 def file_under(base: Path, path: str) -> Path:

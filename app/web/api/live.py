@@ -8,6 +8,8 @@ Paused, speed, the instant shown and the kept range come from the session's one 
 its playback (:meth:`~app.live.session.SessionView.playback`), as in the panel and
 ``GET /api/sessions``. With an instructor (``serve --instructor-token``), a route that changes
 the shared session needs ``Authorization: Bearer <token>``: 401 without, 403 with a wrong one.
+A private session answers only to its holder and the instructor (``app.web.api.sessions``):
+every route, reading ones included, is 404 to anyone else.
 """
 
 from __future__ import annotations
@@ -148,12 +150,22 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
 
 
 def instructor_check(
-    instructor: Instructor, resolve: Callable[..., tuple[str, SessionView]]
+    instructor: Instructor,
+    resolve: Callable[..., tuple[str, SessionView]],
+    private: bool = False,
 ) -> Callable[..., tuple[str, SessionView]]:
-    """A FastAPI dependency: the session to change, once the caller may change it (anyone,
-    unless an instructor drives the shared session: then its token)."""
+    """A FastAPI dependency: the session to change, once the caller may change it (a private
+    session: its holder or the instructor, checked by ``resolve``; the shared one: anyone,
+    unless an instructor drives it: then its token). ``private``: the server runs private
+    sessions (the refusal tells students how to get one)."""
 
     session, bearer = Depends(resolve), Depends(BEARER)
+    students = (
+        "students: your browser's page drives your own session (the API: "
+        "/api/sessions/mine/...), a script opens one with POST /api/sessions; or watch"
+        if private
+        else "students: watch it (reading needs no token)"
+    )
 
     def writable(
         s: tuple[str, SessionView] = session,
@@ -165,13 +177,16 @@ def instructor_check(
             raise HTTPException(
                 401,
                 detail="the instructor drives the shared session: send the header "
-                "'Authorization: Bearer <instructor token>' to change it (students: open a "
-                "private session with POST /api/sessions, or watch)",
+                f"'Authorization: Bearer <instructor token>' to change it ({students})",
                 headers={"WWW-Authenticate": "Bearer"},
             )
         if not instructor.is_token(credentials.credentials):
             raise HTTPException(
-                403, detail="wrong instructor token: the shared session was not changed"
+                403,
+                detail="wrong instructor token: the shared session was not changed"
+                + (
+                    " (a private session's token acts on /api/sessions/mine/...)" if private else ""
+                ),
             )
         return s
 
@@ -182,12 +197,14 @@ def session_router(
     prefix: str,
     resolve: Callable[..., tuple[str, SessionView]],
     instructor: Instructor | None = None,
+    private: bool = False,
 ) -> APIRouter:
     """The session-scoped routes under ``prefix``; ``resolve`` is a FastAPI dependency
-    returning (session id, session); changes go through :func:`instructor_check`."""
-    r = router(prefix, "live session")
+    returning (session id, session) once the caller may use it; changes go through
+    :func:`instructor_check`."""
+    r = router(prefix, None)  # each route is tagged (/docs)
     Session = Depends(resolve)
-    Writable = Depends(instructor_check(instructor or Instructor(None), resolve))
+    Writable = Depends(instructor_check(instructor or Instructor(None), resolve, private))
 
     def _playback(session: SessionView, action: Callable[[], Any]) -> dict[str, Any]:
         try:

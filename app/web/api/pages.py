@@ -7,6 +7,10 @@ a wheel installed anywhere serves them, and ``/docs`` needs no internet.
 With an instructor, ``/?token=T`` (the right token) frames the scene with the token in its
 websocket address, so the display knows that browser drives the shared demo
 (:mod:`app.web.auth`); every other browser reads that the instructor drives it.
+
+With private sessions, ``/`` gives the browser its seat cookie (HttpOnly, once): the scene's
+websocket carries it to the display, which opens (or finds again) the browser's own session,
+and the page's status line reads that session through ``/api/sessions/mine/state``.
 """
 
 from __future__ import annotations
@@ -21,11 +25,12 @@ from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
 from fastapi.responses import FileResponse, HTMLResponse
 from fastapi.staticfiles import StaticFiles
 
+from app.live.registry import usable_credential
 from app.live.session import FALL_HOLD_S
 from app.methods import METHOD_INFO
 from app.report_dir import ReportChoice, package_dir
 from app.web.api.edges import file_under, router
-from app.web.auth import TOKEN_PARAM, Instructor
+from app.web.auth import SEAT_COOKIE, TOKEN_PARAM, Instructor, new_credential
 from app.web.overlays import MEASURED, PREDICTED, REFERENCE
 from app.web.report_page import render_report_page
 from controller import strategy
@@ -68,6 +73,18 @@ ROLES = {  # the line the page shows under its title, by role
     "<b>instructor</b> drives.</p>",
     "wrong": "<p class='role'><b>That instructor token is wrong</b>: you watch as a student.</p>",
 }
+# How scripts do the same, by mode (the routes named work in that mode; a student's changes of
+# an instructor's demo are refused, so they are not suggested)
+API_HINTS = {
+    "shared": '<code>PUT /api/params</code> with <code>{"walk": {"step_length": 0.3}}</code>',
+    "instructor": '<code>PUT /api/params</code> with <code>{"walk": {"step_length": '
+    "0.3}}</code> and the header <code>Authorization: Bearer &lt;your token&gt;</code>",
+    "watch": "<code>GET /api/state</code> (the instructor changes the demo)",
+    "private": "<code>POST /api/sessions</code> opens a session of a script's own (its answer's "
+    "<code>token</code> goes in <code>Authorization: Bearer</code>), then <code>PUT "
+    "/api/sessions/mine/params</code>; in this browser, <code>/api/sessions/mine/...</code> is "
+    "this page's session",
+}
 
 
 def pages_router(
@@ -83,7 +100,7 @@ def pages_router(
     r = router()
 
     @r.get("/", response_class=HTMLResponse, include_in_schema=False)
-    def index(request: Request) -> HTMLResponse:
+    def index(request: Request) -> HTMLResponse:  # noqa: C901 - one branch per role
         host = request.url.hostname or "127.0.0.1"
         if ":" in host:  # IPv6 literal
             host = f"[{host}]"
@@ -109,9 +126,39 @@ def pages_router(
         page = page.replace("{{ROLE}}", ROLES[role])
         page = page.replace("{{OWN_ROBOTS}}", own_robots_html())
         page = page.replace("{{FALL_HOLD_S}}", f"{FALL_HOLD_S:g}")
+        hint = (
+            "instructor"
+            if role == "instructor"
+            else "private"
+            if private
+            else "watch"
+            if role in ("student", "wrong")
+            else "shared"
+        )
+        page = page.replace("{{API_HINT}}", API_HINTS[hint])
+        page = page.replace("{{PRIVATE}}", "true" if private else "false")
+        shared_label = (
+            "Shared demo (no session of your own yet)"
+            if private and role != "instructor"
+            else "Shared demo"
+            if private
+            else "Shared session"
+        )
+        page = page.replace("{{SHARED_LABEL}}", shared_label)
         for name, rgb in COLOURS.items():
             page = page.replace(f"{{{{COLOR_{name}}}}}", "rgb({},{},{})".format(*rgb))
-        return HTMLResponse(page, headers={"Cache-Control": "no-store"})
+        response = HTMLResponse(page, headers={"Cache-Control": "no-store"})
+        if private and usable_credential(request.cookies.get(SEAT_COOKIE)) is None:
+            # the browser's credential for its own session: HttpOnly (no script reads it),
+            # sent to this host only, the scene's port included (cookies know no ports)
+            response.set_cookie(
+                SEAT_COOKIE, new_credential(), httponly=True, samesite="strict", path="/"
+            )
+        return response
+
+    @r.get("/favicon.ico", include_in_schema=False)
+    def favicon() -> FileResponse:
+        return FileResponse(static_dir / "favicon.svg", media_type="image/svg+xml")
 
     @r.get("/report", response_class=HTMLResponse, include_in_schema=False)
     def report_page() -> HTMLResponse:

@@ -21,7 +21,7 @@ FILE_NAMES = {"zip": "{name}.zip", "html": "{name}.html", "csv": "{name}.csv", "
 
 def recording_router(prefix: str, resolve: Callable[..., tuple[str, SessionView]]) -> APIRouter:
     """The recording route under ``prefix`` (``/api`` or ``/api/sessions/{sid}``)."""
-    r = router(prefix, "live session")
+    r = router(prefix, None)  # each route is tagged (/docs)
     Session = Depends(resolve)
 
     @r.get(
