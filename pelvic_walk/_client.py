@@ -108,6 +108,8 @@ class Client:
             extra["Authorization"] = f"Bearer {token}"
         self._http = _http or httpx.Client(base_url=self.url, timeout=timeout)
         self._headers = extra
+        self._session_tokens: dict[str, str] = {}  # sessions this client opened -> their token
+        self._parent: Client | None = None  # the client that opened this one's session
         self._owns_http = _http is None
 
     # -- plumbing ----------------------------------------------------------------------------
@@ -236,10 +238,21 @@ class Client:
 
     def open_session(self) -> Client:
         """Open a private session (a server with ``--sessions private``) and return a client
-        for it, sharing this one's connection, token, headers and cookies."""
-        created = self._json("POST", "/api/sessions")
+        for it, sharing this one's connection, headers and cookies; it sends the session's own
+        token (the server gives it once, in this answer) as its bearer credential. A second
+        call returns the same session (one seat a client)."""
+        # a session this client holds already: asked with its token, the server returns it
+        held = next(reversed(self._session_tokens.values()), None)
+        extra = {"Authorization": f"Bearer {held}"} if held else {}
+        created = self._json("POST", "/api/sessions", headers=extra)
         child = Client(self.url, session=created["id"], _http=self._http)
+        child._parent = self
         child._headers = dict(self._headers)
+        if created.get("token"):  # the session's own credential, given only in this answer
+            self._session_tokens[created["id"]] = created["token"]
+        token = self._session_tokens.get(created["id"])
+        if token:
+            child._headers["Authorization"] = f"Bearer {token}"
         child.created = created  # type: ignore[attr-defined]
         return child
 
@@ -247,7 +260,10 @@ class Client:
         """Close this client's private session."""
         if self.session in (None, "shared"):
             raise ValueError("this client drives the shared session, which cannot be closed")
-        return self._json("DELETE", f"/api/sessions/{quote(str(self.session), safe='')}")
+        closed = self._json("DELETE", f"/api/sessions/{quote(str(self.session), safe='')}")
+        if self._parent is not None:
+            self._parent._session_tokens.pop(str(self.session), None)
+        return closed
 
     # -- headless runs -------------------------------------------------------------------------
     def start_run(

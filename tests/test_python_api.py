@@ -313,10 +313,15 @@ def test_client_drives_a_served_tool_and_raises_the_apis_refusals(served):
         with pytest.raises(pw.NotFound, match="no run with id"):
             teacher.get_run("nope")
 
-        # a private session: a student's own, no token needed
+        # a private session: a student's own; the client sends the token the server gave it
         mine = student.open_session()
         try:
             assert mine.session and mine.session != "shared"
+            assert student.open_session().session == mine.session  # one seat a client
+            stranger = pw.Client(served)
+            with pytest.raises(pw.NotFound):  # knowing the id grants nothing
+                pw.Client(served, session=mine.session).pause()
+            stranger.close()
             assert mine.pause()["paused"] is True
             assert mine.set_params(step_length=0.25)["walk"]["step_length"] == 0.25
             assert student.params()["walk"]["step_length"] == 0.3  # the shared one unchanged
