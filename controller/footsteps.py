@@ -439,6 +439,8 @@ class TickSamples:
         self.times = times  # (n_ticks, N + 2) [s] the queried times (unclamped)
         sample = plan.sample(times.ravel(), margin)
         self._rows = [a.reshape(n_ticks, k, *a.shape[1:]) for a in sample]
+        for rows in self._rows:  # a tick's rows are views: read-only for every reader
+            rows.flags.writeable = False
         self.n_ticks = n_ticks
 
     def covers(self, plan: FootstepPlan, margin: float, offsets: np.ndarray, t: float, j: int):

@@ -46,6 +46,8 @@ from controller.arm_swing import build_arm_qp, solve_arm, yaw_momentum
 from controller.com_mpc import ComMpc, ComPlan
 from controller.compiled import kernel
 from controller.footsteps import (
+    LEFT,
+    RIGHT,
     FootstepPlan,
     PlanSample,
     TickSamples,
@@ -282,12 +284,12 @@ class Walker:
                 self.com_mpc.sample_offsets,
                 com_plan.com,
                 _read_only(p_world_com_des),
-                _read_only(plan.p_left[h]),
-                _read_only(plan.p_right[h]),
-                _read_only(plan.p_left[0]),
-                _read_only(plan.p_right[0]),
-                _SIDE[int(plan.support_side[0])] if plan.in_ssp[0] else "both",
-                _SIDE[int(plan.swing_side[0])] if plan.swing_side[0] >= 0 else None,
+                plan.p_left[h],  # views of the plan's read-only table
+                plan.p_right[h],
+                plan.p_left[0],
+                plan.p_right[0],
+                _SIDE[plan.support_side[0]] if plan.in_ssp[0] else "both",
+                _SIDE.get(plan.swing_side[0]),
                 int(plan.step[0]),
                 float(plan.s_ssp[0]),
                 p,
@@ -453,7 +455,8 @@ class Walker:
         self.set_params(self.snapshot_params().replace(**groups))
 
 
-_SIDE = ("left", "right")  # StrategyInputs.support and .swing by side (LEFT, RIGHT)
+# StrategyInputs.support and .swing by side (LEFT, RIGHT; a numpy integer hashes as its int)
+_SIDE = {LEFT: "left", RIGHT: "right"}
 
 
 def _read_only(a: np.ndarray) -> np.ndarray:
