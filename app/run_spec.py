@@ -150,4 +150,9 @@ class RunSpec:
         if self.seed is not None:
             parts.append(f"--seed {self.seed}")
         parts += [f"--set {name}={value}" for name, value in self.overrides]
+        known = strategy.info(self.method) if strategy.is_registered(self.method) else None
+        if known is not None and not known.builtin and self.strategy_file is None:
+            # a class defined in this process (a notebook): no file the command could load
+            parts.append(f"  # {self.method} is defined in your session: save it in a file and "
+                         "run it with --strategy FILE.py")  # fmt: skip
         return " ".join(parts)

@@ -178,12 +178,24 @@ def prediction_error(answer: Any, run: pw.Run, plan: Any, ahead: float) -> bool 
     t = float(rows["t [s]"].iloc[0])
     measured = float(np.interp(t, run.column("t"), run.column("com_y")))
     right = abs(float(rows["com_y [m]"].iloc[0]) - measured) * 100
+    if not _unanswered(answer, "the prediction's error, in centimetres"):
+        try:
+            value = float(answer)
+        except (TypeError, ValueError):
+            value = math.nan
+        if abs(abs(value) - right) <= 0.05 and value < 0:
+            print(f"{NOT_YET} the size of the error is asked: take the absolute value (abs)")
+            return False
+        if abs(abs(value) * 100 - right) <= 0.05:
+            print(f"{NOT_YET} that is in metres: the question asks for centimetres (x 100)")
+            return False
     return _number(
         answer,
         right,
         0.05,
         "the prediction's error, in centimetres",
-        "interpolate the measured com_y at the sample's time t (np.interp), then subtract",
+        "interpolate the measured com_y at the sample's time t (np.interp), subtract it from "
+        "the predicted com_y, take the absolute value and give it in centimetres",
     )
 
 

@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from app.methods import method_hex
+from app.methods import METHOD_INFO, method_hex
 from app.sim.metrics import KAPPA_SINGULAR
 from controller.params import GROUPS, ControllerParams
 
@@ -63,7 +63,7 @@ def plot(runs: Sequence[Any], *panels: str) -> Figure:
             raise ValueError(f"unknown panel {p!r} (one of: {', '.join(PANELS)})")
     fig = Figure(figsize=(9, 1.9 * len(chosen) + 0.6), layout="constrained")
     axes = fig.subplots(len(chosen), 1, sharex=True, squeeze=False)[:, 0]
-    names = labels(runs)
+    names = labels(runs, titles=True)
     per_method: dict[str, int] = {}
     styles = []
     for r in runs:
@@ -136,14 +136,16 @@ def param_value(run: Any, dotted: str) -> Any:
     return getattr(getattr(run.params, group), name)
 
 
-def labels(runs: Sequence[Any]) -> list[str]:
-    """A name per run: its method, with the parameters that tell it from the others'."""
+def labels(runs: Sequence[Any], titles: bool = False) -> list[str]:
+    """A name per run: its method (``titles``: the strategy's label, as the legends of the
+    live tool show it), with the parameters that tell it from the others' (dotted names)."""
     differing = differing_params(runs)
     out = []
     for r in runs:
         same = [o for o in runs if o.method == r.method]
-        extra = [f"{d.partition('.')[2] or d}={param_value(r, d)}" for d in differing]
-        out.append(f"{r.method} ({', '.join(extra)})" if extra and len(same) > 1 else r.method)
+        name = METHOD_INFO[r.method].title if titles else r.method
+        extra = [f"{d}={param_value(r, d)}" for d in differing]
+        out.append(f"{name} ({', '.join(extra)})" if extra and len(same) > 1 else name)
     seen: dict[str, int] = {}
     unique = []
     for label in out:

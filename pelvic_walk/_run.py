@@ -39,6 +39,7 @@ COMPARE_KEYS = (
     "waist_yaw_rate_max_deg_s",
     "yaw_momentum_peak",
     "energy_two_step_mean",
+    "energy_two_step_std",
     "condition_number_legs_max",
     "zmp_in_support_ratio",
     "solver_failures",

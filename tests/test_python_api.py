@@ -161,7 +161,7 @@ def test_runs_of_one_method_are_labelled_by_what_differs():
     a = pw.simulate("fixed", step_length=0.2, steps=1)
     b = pw.simulate("fixed", step_length=0.2, steps=1, step_time=1.0)
     table = pw.compare([a, b])
-    assert list(table.index) == ["fixed (step_time=1.2)", "fixed (step_time=1.0)"]
+    assert list(table.index) == ["fixed (walk.step_time=1.2)", "fixed (walk.step_time=1.0)"]
     assert list(table["walk.step_time"]) == [1.2, 1.0]
 
 
