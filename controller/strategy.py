@@ -295,8 +295,8 @@ def register(
         ):
             raise ValueError(f"{where}: color must be three integers 0-255, got {color!r}")
     else:  # the first colour of the palette no other strategy wears
-        taken = {i.color for i in _REGISTRY.values() if i.name != name}
-        free = [c for c in PALETTE if c not in taken]
+        worn = {i.color for i in _REGISTRY.values() if i.name != name}
+        free = [c for c in PALETTE if c not in worn]
         color = free[0] if free else PALETTE[len(_REGISTRY) % len(PALETTE)]
     label = cls.label if isinstance(cls.label, str) and cls.label.strip() else name
     paper_label = cls.paper_label if isinstance(cls.paper_label, str) and cls.paper_label else label
