@@ -36,6 +36,7 @@ TIMING_KEYS = (
     "tick_ms_median",
     "tick_ms_p99",
     "duration_s",
+    "cpu_s",
 )
 
 
@@ -51,8 +52,13 @@ class ClaimResult:
     verdict: str  # "holds", "partly", "does not hold" or "not measured"
     rule: str
     measured: dict[str, Any]  # the numbers the rule read
-    # the verdict on another reading of the same numbers (e.g. energy at 1 ms) -> verdict
+    # reading -> verdict, when the claim is judged on other readings of the same numbers (e.g.
+    # the energy at 1 ms); with the main reading's when they disagree (verdict DEPENDS)
     variants: dict[str, str] = field(default_factory=dict)
+    readings: dict[str, str] = field(default_factory=dict)  # another reading -> our numbers
+    reading: str = ""  # the main reading's name (``ours`` is on it), when there are others
+    why: str = ""  # why the readings disagree (verdict DEPENDS)
+    check: str = ""  # not empty: a consistency check (not counted), and why
 
 
 @dataclass(frozen=True)
@@ -70,6 +76,7 @@ class Meta:
     backend: str = ""  # where the runs ran (app.sweep.engine)
     load_average: float | None = None  # the machine's 1-minute load average at the end
     load_average_start: float | None = None  # ... and when the runs started
+    cpu_s: float | None = None  # CPU time of the runs, all processes (local pool only) [s]
 
 
 @dataclass(frozen=True)
@@ -106,6 +113,16 @@ class StudyResults:
 
     def claims_of(self, section: str) -> list[ClaimResult]:
         return [c for c in self.claims if c.section == section]
+
+    @property
+    def tallied(self) -> list[ClaimResult]:
+        """The claims judged as results (the tally), without the consistency checks."""
+        return [c for c in self.claims if not c.check]
+
+    @property
+    def checks(self) -> list[ClaimResult]:
+        """The consistency checks: judged, listed apart, not counted."""
+        return [c for c in self.claims if c.check]
 
 
 def _json_safe(obj: Any) -> Any:
