@@ -20,6 +20,7 @@ from app.experiments.balance import BalanceSection, ZmpSection
 from app.experiments.energy import EnergySection
 from app.experiments.kappa import KappaSection
 from app.experiments.limits import EquivalentLengths, KinematicsSection, MaxStep
+from app.experiments.paper import numbers as paper_numbers
 from app.experiments.robustness import RobustnessSection
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.waist import LateralSection, WaistSection
@@ -110,6 +111,7 @@ class StudyResults:
     claims: list[ClaimResult] = field(default_factory=list)
     runs: dict[str, RunRecord] = field(default_factory=dict)
     figures: dict[str, str] = field(default_factory=dict)  # name -> file in figures/
+    paper: dict[str, Any] = field(default_factory=paper_numbers)  # the paper's, from paper.py
 
     def claims_of(self, section: str) -> list[ClaimResult]:
         return [c for c in self.claims if c.section == section]
