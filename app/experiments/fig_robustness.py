@@ -118,7 +118,9 @@ def fig_robustness(study: Study, results: Results, r: StudyResults, path: Path) 
             f"push on the torso at mid single support ({what});\n"
             "line: up to the first push that topples it"
         )
-        ax.legend(fontsize=8, loc="lower right")
+        top = max((pc.failed or pc.survived or 0.0) for pc in rob.pushes.values() if pc)
+        ax.set_ylim(0, 1.3 * top)
+        ax.legend(fontsize=7, loc="upper center", ncol=3)
     return finish(
         fig, True, path, "Robustness: random pushes, larger random pushes, one push", y=1.02
     )
