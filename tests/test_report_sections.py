@@ -23,6 +23,7 @@ from app.experiments.robustness import (
     push_key,
     trade,
     trade_cells,
+    trade_jobs,
 )
 from app.experiments.runs import RunSummary, case_key, failure_reasons, length_key
 from app.experiments.sensitivity import SensitivityRow, SensitivitySection, effective, reads
@@ -333,3 +334,26 @@ def test_the_kappa_legs_cells_read_the_run_summary_field():
     spec = study.figure_run("fixed", 0.3)
     case = kappa_case(study, {spec: RunResult(spec, s)}, "fixed", 0.3)
     assert case is not None and case.kappa_legs_run_max == 76.0
+
+
+def test_the_trade_pushes_run_once_each():
+    """The push bisections of the trade: one per distinct run. The fixed pelvis reads no
+    pelvis parameter, so the k_pel cell at the default DSP share is the section's own push;
+    the defaults' cell is never run again when the section measures that length."""
+    study = dataclasses.replace(QUICK, pushes=Pushes(lengths=(0.3,)))
+    cells = trade_cells(study, sensitivity())
+    assert [n for n, _ in cells] == [
+        "pelvis.k_pel = 0.45, walk.dsp_ratio = 0.2",
+        "the authors' DSP and step width",
+    ]
+    jobs = trade_jobs(study, cells)
+    methods = sorted((m, ov) for m, ov, _ in jobs)
+    assert ("fixed", ()) not in methods and ("mpc", ()) not in methods
+    assert set(methods) == {
+        ("fixed", tuple(sorted(AUTHORS))),
+        ("mpc", tuple(sorted(AUTHORS))),
+        ("mpc", (("pelvis.k_pel", 0.45),)),
+    }
+    assert len(jobs) == 3 * 2  # both directions
+    away = dataclasses.replace(study, pushes=Pushes(lengths=(0.2,)))  # not the trade's length
+    assert ("fixed", (), "left") in trade_jobs(away, cells)
