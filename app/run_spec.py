@@ -12,6 +12,7 @@ a horizontal force on the torso through the whole run, each axis N(0, :data:`DIS
 renewed every :data:`DISTURBANCE_PERIOD` (``app.sim.session.RunConfig``). 5 N is 1 % of the
 robot's weight (~0.1 m/s^2 on the CoM): unmodelled pulls such as a tether or a hand on a safety
 rope. Repeats then differ for the whole run, not only by a start-up transient that dies out.
+A spec may ask for pushes of another size (``push_std``, e.g. the robustness section's 15 N).
 """
 
 from __future__ import annotations
@@ -69,10 +70,13 @@ class RunSpec:
     arms: bool = True
     seed: int | None = None
     overrides: tuple[Override, ...] = ()
+    push_std: float | None = None  # [N] the seeded pushes' size (None: DISTURBANCE)
     # "FILE.py:Class" of a user's strategy (filled in from the registry; None: a built-in)
     strategy_file: str | None = None
 
     def __post_init__(self) -> None:
+        if self.push_std is not None and (self.seed is None or not self.push_std >= 0.0):
+            raise ValueError(f"push_std needs a seed and must be >= 0 N, got {self.push_std!r}")
         if self.strategy_file is not None:
             try:
                 loaded = strategy.load_file(self.strategy_file)
@@ -97,14 +101,19 @@ class RunSpec:
     @property
     def disturbance(self) -> float:
         """[N] std of the seeded pushes (0 without a seed)."""
-        return DISTURBANCE if self.seed is not None else 0.0
+        if self.seed is None:
+            return 0.0
+        return DISTURBANCE if self.push_std is None else self.push_std
 
     @property
     def key(self) -> str:
-        """A readable, stable name: ``mpc_L0.300_n10_arms_s-`` (+ ``_pelvis.k_pel=0.3`` ...)."""
+        """A readable, stable name: ``mpc_L0.300_n10_arms_s-`` (+ ``_pelvis.k_pel=0.3`` ...,
+        ``_push15N`` for pushes of another size than the study's)."""
         arms = "arms" if self.arms else "noarms"
         seed = "-" if self.seed is None else str(self.seed)
         extra = "".join(f"_{name}={value}" for name, value in self.overrides)
+        if self.push_std is not None and self.push_std != DISTURBANCE:
+            extra += f"_push{self.push_std:g}N"
         return f"{self.method}_L{self.step_length:.3f}_n{self.n_steps}_{arms}_s{seed}{extra}"
 
     def params(self) -> ControllerParams:
@@ -149,6 +158,8 @@ class RunSpec:
             parts.append("--no-arms")
         if self.seed is not None:
             parts.append(f"--seed {self.seed}")
+        if self.push_std is not None and self.push_std != DISTURBANCE:
+            parts.append(f"--disturbance {self.push_std:g}")
         parts += [f"--set {name}={value}" for name, value in self.overrides]
         known = strategy.info(self.method) if strategy.is_registered(self.method) else None
         if known is not None and not known.builtin and self.strategy_file is None:

@@ -29,6 +29,9 @@ from typing import Any
 
 # Readings of the lateral distance Delta d_{FP,i,y} of eq. (31)-(32): controller/pelvis_reference.py
 LATERAL_MODES: tuple[str, ...] = ("current", "nominal", "predicted")
+# What the reference pelvic angle of eq. (27)-(33) is computed from over the MPC's horizon:
+# the predicted CoM and the planned feet (the paper), or the state now held (an ablation)
+REFERENCE_SOURCES: tuple[str, ...] = ("predicted", "now")
 # Where a step's double support lies: all at its start (our plan) or half at each end (the
 # authors' public implementation): controller/footsteps.py, docs/DESIGN.md
 DSP_SPLITS: tuple[str, ...] = ("start", "both_ends")
@@ -149,6 +152,14 @@ class PelvisMpcParams:
         "Lateral distance (eq. 31-32)",
         help="current: pelvis (the CoM MPC's state) to foot now, held over the horizon (the "
         "paper's Delta d_{FP,i,y}); predicted: per horizon sample; nominal: half the step width",
+    )
+    reference: str = _choice(
+        "predicted",
+        REFERENCE_SOURCES,
+        "Reference angle from",
+        help="predicted: eq. (27)-(33) at every horizon sample, from the predicted CoM and the "
+        "planned feet (the paper); now: from the CoM MPC's state and the feet now, held over "
+        "the horizon (an ablation: the MPC without its prediction)",
     )
     lateral_floor: float = _f(
         0.03,

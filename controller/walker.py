@@ -256,9 +256,15 @@ class Walker:
 
         # 6. Reference pelvic angle over the horizon (eq. 27-33).
         feet_l, feet_r = plan.p_left[h, :2], plan.p_right[h, :2]  # the soles over the horizon
+        com_h = com_plan.com
+        if p.pelvis.reference == "now":  # ablation: no prediction, the state now held
+            n_h = len(com_h)
+            com_h = np.tile(p_world_com_des[:2], (n_h, 1))
+            feet_l = np.tile(plan.p_left[0, :2], (n_h, 1))
+            feet_r = np.tile(plan.p_right[0, :2], (n_h, 1))
         lateral = lateral_distances(
             p.pelvis.lateral_distance,
-            com_plan.com,
+            com_h,
             feet_l,
             feet_r,
             p_world_com_des,  # the CoM MPC's state now (the estimate would feed noise in)
@@ -267,7 +273,7 @@ class Walker:
             p.walk.step_width / 2,
             p.pelvis.lateral_floor,
         )
-        theta_ref = reference_pelvic_angles(com_plan.com, feet_l, feet_r, p.pelvis.k_pel, lateral)
+        theta_ref = reference_pelvic_angles(com_h, feet_l, feet_r, p.pelvis.k_pel, lateral)
 
         # 7. The pelvis strategy's waist rate (the paper's: the pelvic MPC, eq. 34-38).
         arms = self.arms

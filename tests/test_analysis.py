@@ -74,6 +74,28 @@ def test_analysis_view_shows_both_readings_of_eq5_and_one_percentage():
         assert f"({number})" in math_block
 
 
+def test_the_lessons_quote_the_reference_report():
+    """The lessons' limits, the MPC's waist and the paper's numbers are the reference report's
+    (app.reference_report's results.json), not typed: the clean limits are section 2's, the
+    paper's are app/experiments/paper.py's."""
+    import json
+
+    from app.experiments import paper
+    from app.report_dir import reference_report_dir
+    from app.web import lesson_numbers
+    from app.web.lessons import CLEAN_LIMIT_M, LESSONS, PAPER_LIMIT_M, PRESETS
+
+    data = json.loads((reference_report_dir() / "results.json").read_text())
+    assert CLEAN_LIMIT_M == {m: d["longest_clean"] for m, d in data["max_step"].items()}
+    assert PAPER_LIMIT_M == paper.MAX_STEP and lesson_numbers.paper() == paper.numbers()
+    first = LESSONS[0].watch
+    assert f"fixed {CLEAN_LIMIT_M['fixed']:.2f} m, MPC {CLEAN_LIMIT_M['mpc']:.2f} m" in first
+    waist = data["waist"]["cases"]["mpc@0.40"]["peak_abs_angle_deg"]
+    assert f"about {waist:.0f}°" in first
+    eq5 = paper.KINEMATICS.step_max_rotation
+    assert f"{eq5:.2f} m (eq. 5): the fixed pelvis falls" in PRESETS
+
+
 def test_every_lesson_names_the_paper_and_is_shown_live():
     from app.web.camera import CAMERA_VIEWS
     from app.web.learn_gui import COLUMNS

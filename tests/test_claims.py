@@ -17,14 +17,16 @@ from app.experiments import energy as energy_mod
 from app.experiments import limits, measures, paper
 from app.experiments.balance import ZmpSection
 from app.experiments.claims import CLAIMS, evaluate
-from app.experiments.definitions import QUICK
+from app.experiments.definitions import QUICK, Falls, Pushes
 from app.experiments.energy import EnergyCell, EnergySection
 from app.experiments.kappa import KappaCase, KappaSection
 from app.experiments.limits import KinematicsSection, MaxStep
 from app.experiments.report import escape_cell, header, render, row
 from app.experiments.results import Meta, StudyResults
+from app.experiments.robustness import FallsCell, PushCell, RobustnessSection, push_key
 from app.experiments.runs import StepExtract, case_key, length_key, samples
 from app.experiments.verdicts import (
+    DEPENDS,
     FAILS,
     HOLDS,
     NOT_MEASURED,
@@ -35,7 +37,14 @@ from app.experiments.verdicts import (
     is_,
     verdict,
 )
-from app.experiments.waist import WaistCase, WaistSection, waist_case
+from app.experiments.waist import (
+    LateralCase,
+    LateralSection,
+    WaistCase,
+    WaistSection,
+    sine_share,
+    waist_case,
+)
 from app.experiments.yaw import YawCase, YawRun, YawSection
 
 METHODS = ("fixed", "redundancy", "mpc")
@@ -82,9 +91,11 @@ def _waist(
     acc: float = 100.0,
     toward: float = 0.0,
     anticipates: bool = True,
+    early: float = 0.06,
 ) -> WaistCase:
     """A step turning from +peak to -peak; ``toward``: the DSP's share of the range moved
-    toward the swing (< 0: away)."""
+    toward the swing (< 0: away); ``early``: the turn's size before lift-off (a sine over the
+    step moves 9.5 % of the range in this DSP)."""
     return WaistCase(
         method=m,
         step_length=0.4,
@@ -107,12 +118,41 @@ def _waist(
         dsp_time=0.24,
         step_time=1.2,
         step_index=4,
+        early_turn_share=early if anticipates else 0.0,
+        sine_share=sine_share(0.2),
     )
 
 
-def waist(mpc: WaistCase, red: WaistCase) -> StudyResults:
+def waist(mpc: WaistCase, red: WaistCase, ablation: WaistCase | None = None) -> StudyResults:
+    """The waist cases at 0.4 m; ``ablation``: the MPC's with the reference from the state
+    now (section 3's lateral table)."""
     cases = {case_key("mpc", 0.4): mpc, case_key("redundancy", 0.4): red}
-    return dataclasses.replace(empty(), waist=WaistSection(cases))
+    r = dataclasses.replace(empty(), waist=WaistSection(cases))
+    if ablation is None:
+        return r
+    a = ablation
+    case = LateralCase(
+        "current",
+        0.4,
+        True,
+        True,
+        True,
+        a.range_deg,
+        a.dsp_change_deg,
+        a.dsp_share_of_range,
+        a.anticipates,
+        a.turn_onset_before_liftoff_s,
+        a.early_turn_share,
+        a.rate_at_liftoff_toward_swing_deg_s,
+        a.peak_abs_rate_deg_s,
+        a.peak_abs_rate_change_deg_s2,
+        40.0,
+        reference="now",
+    )
+    lateral = LateralSection(
+        0.2, sine_share(0.2), "current", {}, {}, {case_key("current", 0.4): case}
+    )
+    return dataclasses.replace(r, lateral=lateral)
 
 
 def _run(peak: float | None, fell: bool = False) -> YawRun:
@@ -255,6 +295,19 @@ def stds(mpc: list[float], red: list[float], lengths: list[float]) -> StudyResul
     )
 
 
+def stability(survived: dict[str, float], fell: dict[str, int]) -> StudyResults:
+    """Push survival (bracket 2 N) to the left and right at 0.3 m and falls of 40 walks at
+    15 N, per method (MPC and redundancy)."""
+    pushes = {
+        push_key(m, 0.3, d): PushCell(m, 0.3, d, 0.1, f, f + 2.0, "tilt", 7)
+        for m, f in survived.items()
+        for d in ("left", "right")
+    }
+    falls = {"15 N": {m: FallsCell(m, 15.0, [0.3], 40, n) for m, n in fell.items()}}
+    rob = RobustnessSection(2, 6, [0.3], {}, pushes, Pushes(lengths=(0.3,)), falls, Falls())
+    return dataclasses.replace(empty(), robustness=rob)
+
+
 L5 = [0.15, 0.2, 0.25, 0.35, 0.4]
 # claim id -> verdict -> synthetic results that must give it
 CASES: dict[str, dict[str, StudyResults]] = {
@@ -272,6 +325,11 @@ CASES: dict[str, dict[str, StudyResults]] = {
         HOLDS: waist(_waist("mpc", toward=0.05), _waist("redundancy", anticipates=False)),
         PARTLY: waist(_waist("mpc"), _waist("redundancy")),  # both turn early
         FAILS: waist(_waist("mpc", anticipates=False), _waist("redundancy", anticipates=False)),
+    },
+    "waist_from_prediction": {  # the ablation: the reference from the state now
+        HOLDS: waist(_waist("mpc"), _waist("redundancy"), _waist("mpc", anticipates=False)),
+        PARTLY: waist(_waist("mpc"), _waist("redundancy"), _waist("mpc", early=0.02)),
+        FAILS: waist(_waist("mpc"), _waist("redundancy"), _waist("mpc", early=0.05)),
     },
     "waist_rate_sharp": {
         HOLDS: waist(_waist("mpc", acc=100.0), _waist("redundancy", acc=300.0)),
@@ -324,17 +382,25 @@ CASES: dict[str, dict[str, StudyResults]] = {
             {("fixed", 0.3): (50, 1), ("redundancy", 0.3): (40, 1), ("mpc", 0.3): (45, 1)}
         ),
     },
-    "energy_least": {  # the paper's Table 1 misses 2 lengths: 2 are allowed
-        HOLDS: least({0.15: (15, 13, 10), 0.3: (50, 60, 150), 0.4: (900, 800, 400)}),
-        PARTLY: least(  # least at 1 of 4, tied at 2, missed at 1
+    "energy_least": {  # the paper's MPC is the least at 0.15, 0.20, 0.35, 0.40 m
+        # least where the paper's is; its exceptions (0.25, 0.30 m) are free
+        HOLDS: least({0.15: (15, 13, 10), 0.3: (50, 40, 150), 0.4: (900, 800, 400)}),
+        # least at 0.15 and 0.40 m, tied at 0.20, missed at 0.35; the least at 0.25 and 0.30
+        # (where the paper's is not) count for nothing
+        PARTLY: least(
             {
                 0.15: (15, 13, 10),
                 0.2: (17, 17, 17.001),
-                0.25: (20, 20.001, 20),
-                0.3: (50, 60, 150),
+                0.25: (20, 21, 10),
+                0.3: (50, 60, 10),
+                0.35: (30, 40, 35),
+                0.4: (900, 800, 400),
             }
         ),
-        FAILS: least({0.15: (15, 13, 17), 0.3: (50, 60, 150), 0.4: (900, 300, 400)}),
+        # the exceptions fall elsewhere than the paper's: least only at 0.25 and 0.30 m
+        FAILS: least(
+            {0.15: (15, 13, 17), 0.25: (20, 21, 10), 0.3: (50, 60, 10), 0.4: (900, 300, 400)}
+        ),
     },
     "yaw_030_similar": {
         HOLDS: yaw_030((1.0, 1.05, 1.1), (2.0, 2.1, 2.2)),
@@ -362,6 +428,14 @@ CASES: dict[str, dict[str, StudyResults]] = {
         FAILS: kappa_own_limit(50.0, 80.0, 120.0),
     },
     "zmp": {HOLDS: zmp(0.99), PARTLY: zmp(0.85), FAILS: zmp(0.5)},
+    "stability": {
+        # the MPC survives larger pushes in both directions, falls as often
+        HOLDS: stability({"mpc": 100, "redundancy": 90}, {"mpc": 10, "redundancy": 12}),
+        # larger pushes, but it falls more often at 15 N (Fisher's test separates 5 from 30)
+        PARTLY: stability({"mpc": 100, "redundancy": 90}, {"mpc": 30, "redundancy": 5}),
+        # every measure a tie: not "more stable"
+        FAILS: stability({"mpc": 90, "redundancy": 91}, {"mpc": 10, "redundancy": 12}),
+    },
     "kappa_040_events": {
         HOLDS: kappa_events(lift=(80.0, 60.0), land=(50.0, 70.0)),
         PARTLY: kappa_events(lift=(80.0, 60.0), land=(70.0, 50.0)),
@@ -394,7 +468,7 @@ def test_every_rule_can_fail_and_is_tested(claim):
 def test_claims_table():
     ids = [c.id for c in CLAIMS]
     assert len(ids) == len(set(ids)) >= 17
-    assert {c.section for c in CLAIMS} == {str(n) for n in range(1, 8)}
+    assert {c.section for c in CLAIMS} == {str(n) for n in range(1, 9)}
     for c in CLAIMS:  # every bound reads a number the claim names
         assert c.rule.measures() <= set(c.names)
     energy_ids = {c.id for c in CLAIMS if c.section == "5"}
@@ -412,7 +486,12 @@ def test_paper_numbers_typed_once():
     assert BELOW == [0.15, 0.20, 0.25, 0.35, 0.40]
     assert by["energy_mpc_below_redundancy"].claim.endswith("except 0.30 m")
     assert by["energy_mpc_below_redundancy"].paper.startswith("0.15: 10.1 vs 12.8 J")
-    assert measures.paper_least_misses() == 2  # Table 1: not the least at 0.25 and 0.30 m
+    # Table 1: the MPC is the least but at 0.25 and 0.30 m
+    assert measures.paper_least_lengths() == ([0.15, 0.20, 0.35, 0.40], [0.25, 0.30])
+    assert (
+        by["energy_least"].paper
+        == "least at 0.15, 0.20, 0.35, 0.40 m; not at 0.25, 0.30 m (Table 1)"
+    )
 
 
 def test_equivalent_length_claim_only_where_our_limit_differs():
@@ -532,10 +611,18 @@ def test_energy_verdicts_at_1ms_are_judged_and_shown_where_they_differ():
     table = {m: {k: noisy(c) for k, c in row_.items()} for m, row_ in r.energy.table.items()}
     r = dataclasses.replace(r, energy=dataclasses.replace(r.energy, table=table))
     result = BY_ID["energy_short"].judge(QUICK, r)
-    assert result.verdict == HOLDS and result.variants == {"1 ms": FAILS}
+    assert result.verdict == DEPENDS
+    assert result.variants == {"200 Hz": HOLDS, "1 ms": FAILS} and "chatter" in result.why
+    assert "(n.s.)" in result.readings["1 ms"] and "(n.s.)" not in result.ours
     r = dataclasses.replace(r, claims=evaluate(QUICK, r))
-    table = render(QUICK, r).split("## Claims of the paper")[1].split("\n## ")[0]
-    assert "**holds** (at 1 ms: does not hold)" in table
+    md = render(QUICK, r)
+    table = md.split("## Claims of the paper")[1].split("\n## ")[0]
+    assert "**depends on the reading** (holds at 200 Hz, does not hold at 1 ms)" in table
+    five = md.split("## 5. ")[1].split("\n## ")[0]
+    assert "Verdicts: holds at 200 Hz, does not hold at 1 ms; why the readings differ" in five
+    # where both readings agree, the verdict is theirs
+    same = energy({("fixed", 0.15): (15, 1), ("redundancy", 0.15): (13, 1), ("mpc", 0.15): (10, 1)})
+    assert BY_ID["energy_short"].judge(QUICK, same).verdict == HOLDS
 
 
 def test_energy_partly_needs_half_of_the_comparisons():
@@ -572,8 +659,61 @@ def test_report_from_synthetic_results_keeps_rows_intact():
     for n in range(1, 10):
         assert f"## {n}. " in md
     assert "not drawn: runs missing" in md
-    table = md.split("## Claims of the paper")[1].split("\n## ")[0]
+    table, checks = md.split("## Claims of the paper")[1].split("\n## ")[0].split("**Consistency")
     rows = [line for line in table.splitlines() if line.startswith("|")]
-    assert len(rows) == 2 + len(r.claims)
+    assert len(rows) == 2 + len(r.tallied)
     assert {_cells(line) for line in rows} == {5}
     assert "\\|d rate/dt\\|" in table
+    rows = [line for line in checks.splitlines() if line.startswith("|")]
+    assert len(rows) == 2 + len(r.checks) and {_cells(line) for line in rows} == {6}
+
+
+def test_consistency_checks_are_listed_apart_and_not_counted():
+    """The inputs reproduced (eq. 4-5), the tuned amplitude and the consequence of the clean
+    rule are checks: judged, shown in their own table, left out of the tally."""
+    checks = {c.id for c in CLAIMS if c.check}
+    assert checks == {"kinematics", "waist_amplitude", "kappa_own_limit"}
+    r = empty()  # eq. (1)-(5) need no run
+    r = dataclasses.replace(r, claims=evaluate(QUICK, r))
+    assert {c.id for c in r.checks} == checks and not checks & {c.id for c in r.tallied}
+    md = render(QUICK, r)
+    summary = md.split("## Summary")[1].split("## Words used")[0]
+    assert f"**All {len(r.tallied)} claims:**" in summary
+    assert "Besides them 3 consistency checks (not counted): eq. (4)-(5)" in summary
+
+
+def test_an_early_turn_needs_a_size():
+    """A rate that leans toward the swing at the lift-off while the angle moves away through
+    the DSP (the MPC without its prediction), or a turn too small to see (under a tenth of a
+    sine's), is not an early turn; the sine's own is, at 100 % of a sine's."""
+    away = A * np.cos(np.pi * _T / T) + 3 * A * _T * np.exp(-_T / DSP)  # a lag that decays
+    small = A - 2 * A * ((1 - np.cos(np.pi * _T / T)) / 2) ** 3  # a sine's turn, cubed
+    for curve in (away, small):
+        c = waist_case("m", 0.4, _step(curve))
+        assert c.turn_onset_before_liftoff_s > 0.01 and c.rate_at_liftoff_toward_swing_deg_s > 0
+        assert not c.anticipates and c.early_turn_share < 0.1 * c.sine_share, c
+    sine = waist_case("m", 0.4, _step(SINE))
+    assert sine.early_turn_of_sine == pytest.approx(1.0, abs=0.05) and sine.anticipates
+    decay = waist_case("m", 0.4, _step(DECAY))
+    assert decay.early_turn_share == 0.0 and decay.dsp_share_toward_swing > 0.09
+
+
+def test_stability_comparisons():
+    """Pushes differ only when the brackets do not overlap; falls only when Fisher's exact
+    test separates them."""
+    from app.experiments.robustness import push_order
+    from app.experiments.robustness import stability as compare
+
+    def push(s, f):
+        return PushCell("m", 0.3, "left", 0.1, s, f, None, 7)
+
+    assert push_order(push(94, 96), push(88, 90)) == -1
+    assert push_order(push(88, 90), push(94, 96)) == 1
+    assert push_order(push(94, 96), push(95, 97)) == 0  # overlapping brackets: a tie
+    assert push_order(push(None, 0.0), push(10, 12)) == 1  # falls unpushed
+    assert push_order(push(256, None), push(250, 252)) == -1  # survived the top
+    rob = stability({"mpc": 100, "redundancy": 90}, {"mpc": 28, "redundancy": 22}).robustness
+    orders = {c.what.split(" (")[0]: c.order for c in compare(rob, "mpc", "redundancy")}
+    assert orders == {"push left at 0.30 m": -1, "push right at 0.30 m": -1, "falls at 15 N": 0}
+    rob = stability({"mpc": 90, "redundancy": 90}, {"mpc": 30, "redundancy": 5}).robustness
+    assert [c.order for c in compare(rob, "mpc", "redundancy")] == [0, 0, 1]

@@ -58,9 +58,17 @@ def test_shared_runs_are_deduplicated():
     shared = FULL.figure_run("mpc", 0.30)
     assert {"step", "walk", "zmp"} <= req[shared]  # sweep, waist, kappa, yaw, ZMP: one run
     assert len(req) == len(set(req))
-    energy = [s for s in req if s.seed is not None]
+    energy = [s for s in req if s.seed is not None and s.push_std is None]
     assert len(energy) == len(FULL.energy_lengths) * 3 * FULL.energy_repeats
     assert all(s.n_steps == 20 and s.perturbation == 0.01 for s in energy)
+    # the robustness section's walks under larger pushes: 40 per method at 0.30 m, 15 N
+    heavy = [s for s in req if s.push_std is not None]
+    assert FULL.falls is not None and len(heavy) == 3 * FULL.falls.walks
+    assert {(s.step_length, s.disturbance, s.n_steps) for s in heavy} == {(0.3, 15.0, 20)}
+    assert heavy[0].command().endswith("--seed 0 --disturbance 15")
+    # the ablation: the MPC with the reference from the state now, at the figure lengths
+    ablation = [s for s in req if ("pelvis.reference", "now") in s.overrides]
+    assert sorted(s.step_length for s in ablation) == list(FULL.figure_lengths)
 
 
 def test_sweep_bracket_and_refinement():
@@ -79,6 +87,20 @@ def test_run_spec_keys_are_stable():
     assert RunSpec("mpc", 0.3, 10).key == "mpc_L0.300_n10_arms_s-"
     assert RunSpec("fixed", 0.15, 20, True, 3).key == "fixed_L0.150_n20_arms_s3"
     assert RunSpec("redundancy", 0.4, 6, False).key == "redundancy_L0.400_n6_noarms_s-"
+
+
+def test_run_spec_push_size():
+    """A seeded spec may push harder than the study's 5 N: its own key and command; the
+    study's size keeps the old key, and a size needs a seed."""
+    hard = RunSpec("mpc", 0.3, 20, True, 3, push_std=15.0)
+    assert hard.disturbance == 15.0 and hard.config().disturbance == 15.0
+    assert hard.key == "mpc_L0.300_n20_arms_s3_push15N"
+    assert hard.command().endswith("--seed 3 --disturbance 15")
+    assert RunSpec("mpc", 0.3, 20, True, 3, push_std=5.0).key == "mpc_L0.300_n20_arms_s3"
+    with pytest.raises(ValueError, match="seed"):
+        RunSpec("mpc", 0.3, 20, push_std=15.0)
+    with pytest.raises(ValueError):
+        RunSpec("mpc", 0.3, 20, True, 3, push_std=-1.0)
 
 
 def test_run_spec_overrides_any_parameter():
@@ -100,10 +122,13 @@ def test_run_spec_overrides_any_parameter():
     with pytest.raises(ValueError):  # out of its range: checked by ControllerParams
         RunSpec("mpc", 0.3, 10, overrides=(("pelvis.k_pel", 5.0),)).params()
     study = Study("sweep", 4, 1, (0.3,), 0.05, (0.3,), 1, 4, overrides=(("pelvis.k_pel", 0.3),))
-    runs = planned_runs(study)  # the study's overrides on every run (+ the lateral readings)
-    assert all(("pelvis.k_pel", 0.3) in s.overrides for s in runs)
+    runs = planned_runs(study)  # the study's overrides on every run (+ the lateral readings
+    assert all(("pelvis.k_pel", 0.3) in s.overrides for s in runs)  # and the ablation)
     default = ControllerParams().pelvis.lateral_distance
-    assert {s.overrides for s in runs} == {(("pelvis.k_pel", 0.3),)} | {
+    assert {s.overrides for s in runs} == {
+        (("pelvis.k_pel", 0.3),),
+        (("pelvis.k_pel", 0.3), ("pelvis.reference", "now")),
+    } | {
         (("pelvis.k_pel", 0.3), ("pelvis.lateral_distance", m))
         for m in LATERAL_MODES
         if m != default
@@ -245,3 +270,9 @@ def test_a_runs_command_is_a_valid_simulate_command():
     args = build_parser().parse_args(argv[1:])
     assert args.seed == 7
     assert params_from_args(args, method=args.method) == spec.params()
+    # a walk under larger pushes: simulate builds the same run
+    from app.cli import simulate_config
+
+    hard = RunSpec("mpc", 0.3, 20, True, 4, (("pelvis.reference", "now"),), push_std=15.0)
+    args = build_parser().parse_args(shlex.split(hard.command())[1:])
+    assert simulate_config(args) == hard.config()

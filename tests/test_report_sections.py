@@ -10,14 +10,23 @@ import re
 from app.experiments import limits, paper
 from app.experiments.balance import BalanceCase, BalanceSection, ZmpSection
 from app.experiments.claims import evaluate
-from app.experiments.definitions import AUTHORS, QUICK
+from app.experiments.definitions import AUTHORS, QUICK, Falls, Pushes
 from app.experiments.energy import EnergyCell, EnergySection, joint_groups
 from app.experiments.kappa import KappaSection
 from app.experiments.report import render
 from app.experiments.results import Meta, StudyResults
-from app.experiments.robustness import PushCell, RepeatsCell, RobustnessSection
+from app.experiments.robustness import (
+    FallsCell,
+    PushCell,
+    RepeatsCell,
+    RobustnessSection,
+    push_key,
+    trade,
+    trade_cells,
+    trade_jobs,
+)
 from app.experiments.runs import RunSummary, case_key, failure_reasons, length_key
-from app.experiments.sensitivity import SensitivityRow, SensitivitySection, effective
+from app.experiments.sensitivity import SensitivityRow, SensitivitySection, effective, reads
 from app.experiments.waist import LateralCase, LateralSection, WaistSection, sine_share
 from app.experiments.yaw import YawSection
 from app.sim.world import JOINTS
@@ -82,9 +91,31 @@ def synthetic() -> StudyResults:
     )
     lat = {
         case_key(mode, 0.3): LateralCase(
-            mode, 0.3, mode == "current", True, True, 40.0, -2.0, 0.05, True, 0.2, 60.0, 200.0, 30.0
+            mode,
+            0.3,
+            mode == "current",
+            True,
+            True,
+            40.0,
+            -2.0,
+            0.05,
+            True,
+            0.2,
+            0.05,
+            15.0,
+            60.0,
+            200.0,
+            30.0,
         )
         for mode in ("current", "nominal", "predicted")
+    }
+    ablation = {
+        case_key("current", 0.3): dataclasses.replace(
+            lat[case_key("current", 0.3)],
+            early_turn_share=-0.05,
+            anticipates=False,
+            reference="now",
+        )
     }
     lateral = LateralSection(
         0.2,
@@ -92,6 +123,7 @@ def synthetic() -> StudyResults:
         "current",
         lat,
         {"nominal": {"walks_limit": 0.45, "clean_limit": 0.43}},
+        ablation,
     )
     balance = BalanceSection(
         [0.3],
@@ -111,9 +143,30 @@ def synthetic() -> StudyResults:
             for m in METHODS
         },
         pushes={
-            case_key(m, 0.3): PushCell(m, 0.3, "left", 0.1, 90.0, 100.0, "tilt", 6) for m in METHODS
+            push_key(m, 0.3, d): PushCell(
+                m, 0.3, d, 0.1, 90.0 - 10 * (m == "mpc"), 92.0 - 10 * (m == "mpc"), "tilt", 7
+            )
+            for m in METHODS
+            for d in ("left", "right")
         },
+        push_setup=Pushes(lengths=(0.3,)),
+        falls={
+            "15 N": {
+                m: FallsCell(m, 15.0, [0.3], 40, n, list(range(n)))
+                for m, n in zip(METHODS, (19, 22, 28), strict=True)
+            }
+        },
+        falls_setup=Falls(),
     )
+    study = dataclasses.replace(QUICK, pushes=Pushes(lengths=(0.3,)))
+    sens = sensitivity()
+    cell_pushes = {
+        (m, reads(m, ov), d): PushCell(m, 0.3, d, 0.1, 70.0, 72.0, "tilt", 7)
+        for _, ov in trade_cells(study, sens)
+        for m in ("fixed", "mpc")
+        for d in ("left", "right")
+    }
+    rob = dataclasses.replace(rob, trade=trade(study, sens, rob.pushes, cell_pushes))
     r = StudyResults(
         meta=Meta("cmd", "quick", "date", 1.0, 1.0, 0, 1, 1, "m", {}, "pool", 0.5, 3.0),
         kinematics=limits.kinematics(),
@@ -127,7 +180,7 @@ def synthetic() -> StudyResults:
         lateral=lateral,
         balance=balance,
         robustness=rob,
-        sensitivity=sensitivity(),
+        sensitivity=sens,
     )
     return dataclasses.replace(r, claims=evaluate(QUICK, r))
 
@@ -153,6 +206,16 @@ def test_sections_render_with_intact_tables():
     assert "0.0 / 3.0, 0.40; 12 of 171 (outer)" in md  # balance margin, tilt, edge share
     assert "J per two-step window" in md
     assert "1 / 1 / 2; 4.5" in md  # robustness: fell / off / runs; worst landing
+    eight = md.split("## 8. ")[1].split("## 9. ")[0]
+    assert "| N(0, 15 N) | 0.30 m | 19 / 40 | 22 / 40 | 28 / 40 |" in eight
+    assert "| 0.30 | right | — | 90 / 92 | 90 / 92 | 80 / 82 |" in eight  # both directions
+    assert "| push left at 0.30 m | 80-82 N | 90-92 N | less |" in eight
+    # the stability claim: the MPC survives less in both directions, falls as often (n.s.)
+    assert "- **does not hold**: the MPC's pelvic rotation is more stable" in eight
+    assert "the MPC more stable in 0, less in 2, tied in 1 of 3" in eight
+    # what the default gain costs, stated beside it
+    assert "k_pel = 0.25, the MPC's waist swings 25.0 deg at 0.40 m" in eight
+    assert "80 against 90 N to the left (-10 N)" in eight
 
 
 def test_the_sensitivity_summary_reads_every_row():
@@ -172,6 +235,10 @@ def test_the_sensitivity_summary_reads_every_row():
     assert "the largest MPC - fixed gain in the clean limit is +0.12 m" in nine
     assert "the authors' DSP and step width | 0.28 / 0.28 | 0.36 / 0.36 | +0.08" in nine
     assert "landing < 1 cm, kappa(legs) < 1000" in nine
+    # every gain beside its cost: the largest gain's cell, with its own pushes
+    assert "(pelvis.k_pel = 0.45, walk.dsp_ratio = 0.2, where k_pel = 0.45" in nine
+    assert "| pelvis.k_pel = 0.45, walk.dsp_ratio = 0.2 | 0.45 | +0.12 | 25.0 |" in nine
+    assert "| the defaults | 0.25 | +0.09 | 25.0 | 90 / 92 | 80 / 82 |" in nine
 
 
 def test_summary_and_glossary_at_the_top():
@@ -182,6 +249,14 @@ def test_summary_and_glossary_at_the_top():
     assert 3 <= len(lines) <= 10
     assert "+0.12 m (pelvis.k_pel = 0.45" in summary
     assert "runs that fell: fixed 0/2, redundancy 0/2, mpc 1/2" in summary
+    # the plain paragraph first, then the gain with its cost, then the stability verdict
+    first = summary.strip().split("\n")[0]
+    assert not first.startswith("- ") and "longest step" in first
+    assert "falls in 28 of 40 walks against 19 of 40" in first
+    assert "The cost of that gain: k_pel = 0.25" in summary
+    assert (
+        "**Stability (Sec. VII, section 8): the MPC more stable than redundancy does not" in summary
+    )
     glossary = top.split("## Words used in this report")[1]
     for word in ("**clean**", "**walks**", "**DSP / SSP**", "**J_low**", "kappa(legs)", "tie"):
         assert word in glossary
@@ -259,3 +334,26 @@ def test_the_kappa_legs_cells_read_the_run_summary_field():
     spec = study.figure_run("fixed", 0.3)
     case = kappa_case(study, {spec: RunResult(spec, s)}, "fixed", 0.3)
     assert case is not None and case.kappa_legs_run_max == 76.0
+
+
+def test_the_trade_pushes_run_once_each():
+    """The push bisections of the trade: one per distinct run. The fixed pelvis reads no
+    pelvis parameter, so the k_pel cell at the default DSP share is the section's own push;
+    the defaults' cell is never run again when the section measures that length."""
+    study = dataclasses.replace(QUICK, pushes=Pushes(lengths=(0.3,)))
+    cells = trade_cells(study, sensitivity())
+    assert [n for n, _ in cells] == [
+        "pelvis.k_pel = 0.45, walk.dsp_ratio = 0.2",
+        "the authors' DSP and step width",
+    ]
+    jobs = trade_jobs(study, cells)
+    methods = sorted((m, ov) for m, ov, _ in jobs)
+    assert ("fixed", ()) not in methods and ("mpc", ()) not in methods
+    assert set(methods) == {
+        ("fixed", tuple(sorted(AUTHORS))),
+        ("mpc", tuple(sorted(AUTHORS))),
+        ("mpc", (("pelvis.k_pel", 0.45),)),
+    }
+    assert len(jobs) == 3 * 2  # both directions
+    away = dataclasses.replace(study, pushes=Pushes(lengths=(0.2,)))  # not the trade's length
+    assert ("fixed", (), "left") in trade_jobs(away, cells)

@@ -66,6 +66,17 @@ def test_mpc_turns_the_pelvis_toward_the_forward_foot():
     assert out.waist_angle > np.deg2rad(10)
 
 
+def test_the_ablation_holds_the_reference_of_now_over_the_horizon():
+    """pelvis.reference = now (the study's ablation): the reference angle is the one of the
+    state now at every horizon sample; with the prediction it changes over the horizon."""
+    spans = {}
+    for source in ("predicted", "now"):
+        p = _params("mpc", 0.3, 2).replace(pelvis={"reference": source})
+        session = Session(RunConfig(params=p))
+        spans[source] = max(float(np.ptp(session.tick().theta_ref)) for _ in range(300))
+    assert spans["now"] == 0.0 and spans["predicted"] > 0.05
+
+
 def test_arm_swing_reduces_commanded_yaw_momentum():
     on = Session(RunConfig(params=_params("mpc", 0.3, 2, arms=True)))
     off = Session(RunConfig(params=_params("mpc", 0.3, 2, arms=False)))

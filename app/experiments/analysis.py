@@ -11,6 +11,7 @@ from app.experiments.results import Meta, RunRecord, StudyResults
 from app.experiments.robustness import PushCell
 from app.experiments.runs import Results
 from app.experiments.sensitivity import SensitivitySection, lateral_limits
+from app.run_spec import Override
 
 
 def analyse(
@@ -19,6 +20,7 @@ def analyse(
     meta: Meta,
     sens: SensitivitySection | None = None,
     pushes: dict[str, PushCell | None] | None = None,
+    cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] | None = None,
 ) -> StudyResults:
     """Every section's numbers, the claims' verdicts, and every run's summary."""
     ms = limits.max_step(study, results)
@@ -34,7 +36,7 @@ def analyse(
         zmp=balance.zmp(study, results),
         lateral=waist.lateral(study, results, lateral_limits(sens)),
         balance=balance.balance(study, results),
-        robustness=robustness.robustness(study, results, pushes),
+        robustness=robustness.robustness(study, results, pushes, sens, cell_pushes),
         sensitivity=sens,
         runs={
             s.key: RunRecord(

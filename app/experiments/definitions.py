@@ -11,8 +11,10 @@ The sweep of the longest clean step (section 2) is adaptive: a coarse grid first
 (:attr:`Study.sweep_grid`), then :func:`refinement_runs` fills the gap between each method's
 last clean and first failed length at :attr:`Study.sweep_resolution`. The sensitivity
 section (:class:`Sensitivity`) runs ``app.sweep``'s limit search over a grid of two parameters
-and a few more cells; the robustness section reads Table 1's seeded repeats and adds the
-largest sideways push each method survives (:class:`Pushes`, ``pelvic-walk push-study``).
+and a few more cells; the robustness section reads Table 1's seeded repeats and adds seeded
+walks under larger pushes (:class:`Falls`) and the largest sideways push each method survives
+in both directions (:class:`Pushes`, ``pelvic-walk push-study``), also in the sensitivity cells
+whose gain the report states.
 
 The paper's numbers are in :mod:`app.experiments.paper`; the lengths the paper's figures and
 Table 1 use come from there.
@@ -46,16 +48,20 @@ __all__ = [  # the run's own names, for the modules and tests that read them her
 ROTATING = ("redundancy", "mpc")
 EXTRACTS = ("step", "walk", "zmp")
 LATERAL = "pelvis.lateral_distance"
+REFERENCE = "pelvis.reference"  # what the reference angle is computed from (an ablation)
 _DEFAULT_MODE = ControllerParams().pelvis.lateral_distance
 # The authors' public implementation: 0.18 s on both feet at each end of a 1.2 s step, so a
 # share of 0.36 / 1.2 = 0.30 of the step split half before the lift-off and half after the
 # touch-down (walk.dsp_split = both_ends), and half a step width of 0.1278 m. Its 0.06 s rest
 # in the step has no counterpart in our plan.
+AUTHORS_DSP = 0.30  # share of the step on both feet
+AUTHORS_WIDTH = 0.2556  # [m] step width
 AUTHORS = (
-    ("walk.dsp_ratio", 0.30),
+    ("walk.dsp_ratio", AUTHORS_DSP),
     ("walk.dsp_split", "both_ends"),
-    ("walk.step_width", 0.2556),
+    ("walk.step_width", AUTHORS_WIDTH),
 )
+AUTHORS_REST = 0.06  # [s] their rest within the step
 
 
 @dataclass(frozen=True)
@@ -86,12 +92,27 @@ class Sensitivity:
 
 @dataclass(frozen=True)
 class Pushes:
-    """The largest sideways push each method survives (``app.pushes.largest_survived``)."""
+    """The largest sideways push each method survives (``app.pushes.largest_survived``), in
+    both directions, bracketed to ``resolution``; and the same at ``trade_length`` in the
+    sensitivity cells whose gain the report states (the push margin beside the gain)."""
 
     lengths: tuple[float, ...] = (0.20, 0.30, 0.40)  # [m]
-    direction: str = "left"
+    directions: tuple[str, ...] = ("left", "right")
     duration: float = 0.1  # [s]
-    resolution: float = 10.0  # [N] of the bisection
+    resolution: float = 2.0  # [N] largest bracket (survived .. toppled)
+    f_high: float = 256.0  # [N] top of the bisection (a power of two times the resolution)
+    trade_length: float = 0.30  # [m] where the sensitivity cells' push margin is measured
+
+
+@dataclass(frozen=True)
+class Falls:
+    """Seeded walks under random pushes larger than the study's (Table 1's repeats are the
+    study's own size): the same pushes as a repeat's, each axis N(0, ``force``)."""
+
+    force: float = 15.0  # [N] std of each axis (three times DISTURBANCE)
+    step_length: float = 0.30  # [m]
+    walks: int = 40  # seeds 0 .. walks - 1
+    steps: int = 20
 
 
 @dataclass(frozen=True)
@@ -113,6 +134,7 @@ class Study:
     overrides: tuple[Override, ...] = ()  # applied to every run (a sweep's cell)
     sensitivity: Sensitivity | None = None  # section 8 (None: not run)
     pushes: Pushes | None = None  # the robustness section's push survival (None: not run)
+    falls: Falls | None = None  # the robustness section's walks under larger pushes
 
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
         """The unseeded run every figure section shares at one (method, length)."""
@@ -123,6 +145,23 @@ class Study:
             RunSpec(method, length(step_length), self.energy_steps, True, seed, self.overrides)
             for seed in range(self.energy_repeats)
         ]
+
+    def falls_runs(self, method: str) -> list[RunSpec]:
+        """The seeded walks of :attr:`falls` (none when it is not run)."""
+        f = self.falls
+        if f is None:
+            return []
+        x = length(f.step_length)
+        return [
+            RunSpec(method, x, f.steps, True, seed, self.overrides, push_std=f.force)
+            for seed in range(f.walks)
+        ]
+
+    def ablation_run(self, step_length: float) -> RunSpec:
+        """MPC at one figure length with the reference angle computed from the state now,
+        held over the horizon (no prediction; ``pelvis.reference``)."""
+        extra = ((REFERENCE, "now"),)
+        return RunSpec("mpc", length(step_length), self.n_steps, True, None, self.overrides + extra)
 
     def lateral_run(self, mode: str, step_length: float) -> RunSpec:
         """MPC at one figure length with one reading of the lateral distance (the default
@@ -160,6 +199,7 @@ FULL = Study(
         ),
     ),
     pushes=Pushes(),
+    falls=Falls(),
 )
 QUICK = Study(
     name="quick",
@@ -179,7 +219,8 @@ QUICK = Study(
         landings=(0.01, 0.02, 0.03),
         kappas=(300.0, 1000.0),
     ),
-    pushes=Pushes(lengths=(0.30,), resolution=50.0),
+    pushes=Pushes(lengths=(0.30,), resolution=64.0),
+    falls=Falls(walks=3, steps=6),
 )
 
 STUDIES: dict[str, Study] = {"full": FULL, "quick": QUICK}
@@ -206,9 +247,13 @@ def planned_runs(study: Study) -> Requests:
         for m in study.methods:
             _add(req, study.figure_run(m, x), "step")
     _add(req, study.figure_run("mpc", study.zmp_length), "zmp")  # section 7
-    for x in study.figure_lengths:  # section 3: the lateral distance's readings
+    for x in study.figure_lengths:  # section 3: the lateral distance's readings, the ablation
         for mode in LATERAL_MODES:
             _add(req, study.lateral_run(mode, x), "step")
+        _add(req, study.ablation_run(x), "step")
+    for m in study.methods:  # section 8: walks under larger pushes
+        for spec in study.falls_runs(m):
+            _add(req, spec)
     for x in study.energy_lengths:  # section 5: Table 1
         for m in study.methods:
             for spec in study.energy_runs(m, x):

@@ -67,6 +67,8 @@ class KappaSection:
     landing_ratio_fixed_over_legs: dict[str, dict[str, float]] = dataclasses.field(
         default_factory=dict
     )  # kappa(legs)
+    # kappa(J_low) and kappa(legs) with the left knee straight (:func:`straight_knee`)
+    straight_knee: dict[str, float] = dataclasses.field(default_factory=dict)
 
     def case(self, method: str, x: float) -> KappaCase | None:
         key = case_key(method, x)
@@ -120,13 +122,17 @@ def kappa_case(study: Study, results: Results, m: str, x: float) -> KappaCase | 
     )
 
 
+NEAR_BELOW = 0.05  # [m] the near-limit lengths start this far below the fixed pelvis's limit
+
+
 def near_limit_lengths(study: Study, results: Results, fixed: MaxStep) -> list[float]:
-    """The fixed pelvis's longest clean step, the length ~0.05 m below, its first failures."""
+    """The fixed pelvis's longest clean step, the length ~NEAR_BELOW below, its first
+    failures."""
     if fixed.longest_clean is None:
         return []
     lc, ff = fixed.longest_clean, fixed.first_failed
     cands = figure_lengths_run(study, results, "fixed")
-    below = [x for x in cands if x < lc - 1e-9 and x >= lc - 0.05 - 1e-9]
+    below = [x for x in cands if x < lc - 1e-9 and x >= lc - NEAR_BELOW - 1e-9]
     near = ([below[0]] if below else []) + [lc]
     if ff is not None:
         near.append(ff)
@@ -134,6 +140,18 @@ def near_limit_lengths(study: Study, results: Results, fixed: MaxStep) -> list[f
         if later:
             near.append(later[0])
     return near
+
+
+def straight_knee() -> dict[str, float]:
+    """kappa(J_low) and kappa(legs) in the walk-ready pose with the left knee straight (the
+    leg tilted as in a step): why "diverges" is read on the leg columns."""
+    from controller.kinematics import RobotKinematics, jacobian_conditions
+    from models.dyros_jet import JOINTS, walk_ready_joint_angles
+
+    q = walk_ready_joint_angles()
+    q[JOINTS.index("L_knee")] = 0.0
+    low, legs = jacobian_conditions(RobotKinematics().compute(q).J_low)
+    return {"kappa_low": float(low), "kappa_legs": float(legs)}
 
 
 def kappa(study: Study, results: Results, ms: dict[str, MaxStep]) -> KappaSection:
@@ -151,6 +169,7 @@ def kappa(study: Study, results: Results, ms: dict[str, MaxStep]) -> KappaSectio
         cases=cases(study.kappa_lengths),
         near_limit_cases=cases(near),
         landing_ratio_fixed_over={},
+        straight_knee=straight_knee(),
     )
     ratios: dict[str, dict[str, dict[str, float]]] = {"J_low": {}, "legs": {}}
     for x in sorted(set(study.kappa_lengths) | set(near)):

@@ -7,8 +7,8 @@ texts such as "0.31 / 0.42 m, +35 %" are formatted from these.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from typing import NamedTuple
+from dataclasses import asdict, dataclass
+from typing import Any, NamedTuple
 
 CITATION = (
     'B. Park and J. Park, "Optimization of Pelvic Rotation Walking Pattern Considering Future '
@@ -127,3 +127,19 @@ def table1_lengths_mpc_not_below_redundancy() -> list[float]:
         for x in TABLE1_LENGTHS
         if (a := TABLE1["mpc"][x]) and (b := TABLE1["redundancy"][x]) and a.mean >= b.mean
     ]
+
+
+def numbers() -> dict[str, Any]:
+    """The paper's headline numbers as plain data: ``results.json``'s ``paper``, which the web
+    tool's lessons quote (they cannot import the study)."""
+    return {
+        "citation": CITATION,
+        "robot": asdict(ROBOT),
+        "kinematics": asdict(KINEMATICS),
+        "max_step": dict(MAX_STEP),
+        "waist_peak_deg": WAIST_PEAK_DEG,
+        "waist_peak_length": WAIST_PEAK_LENGTH,
+        "arm_reduction_percent": ARM_REDUCTION_PERCENT,
+        "kappa_ratio": KAPPA_RATIO,
+        "kappa_diverges_length": KAPPA_DIVERGES_LENGTH,
+    }

@@ -16,20 +16,31 @@ import jinja2
 import numpy as np
 
 from app.experiments import paper
-from app.experiments.definitions import AUTHORS, ROTATING, Study
+from app.experiments.definitions import (
+    AUTHORS,
+    AUTHORS_DSP,
+    AUTHORS_REST,
+    AUTHORS_WIDTH,
+    ROTATING,
+    Study,
+)
 from app.experiments.energy import BOOTSTRAP, SIGNIFICANCE, joint_groups, std_gap_p
+from app.experiments.kappa import NEAR_BELOW
 from app.experiments.results import ClaimResult, StudyResults
-from app.experiments.robustness import RobustnessSection
+from app.experiments.robustness import PushCell, RobustnessSection, falls_p, stability
 from app.experiments.runs import case_key, length_key
 from app.experiments.sensitivity import SensitivitySection
-from app.experiments.summary import summary_lines
-from app.experiments.verdicts import FAILS, HOLDS, NOT_MEASURED, PARTLY
-from app.experiments.waist import ANTICIPATION_MIN
+from app.experiments.summary import plain, summary_lines, trade_words
+from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
+from app.experiments.waist import ANTICIPATION_MIN, EARLY_TURN_MIN
+from app.experiments.worker import LANDING_WINDOW
 from app.methods import METHOD_INFO
 from app.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from app.sim.session import GRAVITY
 from app.sweep.measure import threshold_of
 from controller.params import LATERAL_MODES, ControllerParams
+from models.dyros_jet import TOTAL_MASS
 
 _P = ControllerParams()
 
@@ -38,6 +49,7 @@ VERDICT_MARK = {
     HOLDS: "**holds**",
     PARTLY: "**partly**",
     FAILS: "**does not hold**",
+    DEPENDS: "**depends on the reading**",
     NOT_MEASURED: "not measured",
 }
 DASH = "—"
@@ -128,10 +140,12 @@ def lateral_words() -> dict[str, str]:
 
 
 def verdict_cell(c: ClaimResult) -> str:
-    """A claim's verdict, with another reading's where it differs (e.g. energy at 1 ms)."""
+    """A claim's verdict; where it depends on the reading, each reading's (e.g. "partly at
+    200 Hz, does not hold at 1 ms")."""
     out = VERDICT_MARK.get(c.verdict, c.verdict)
-    other = [f"at {k}: {v}" for k, v in c.variants.items() if v != c.verdict]
-    return out + (f" ({'; '.join(other)})" if other else "")
+    if c.verdict != DEPENDS:
+        return out
+    return out + " (" + ", ".join(f"{v} at {k}" for k, v in c.variants.items()) + ")"
 
 
 def robustness_totals(rob: RobustnessSection, methods: Sequence[str]) -> dict[str, dict]:
@@ -147,6 +161,20 @@ def robustness_totals(rob: RobustnessSection, methods: Sequence[str]) -> dict[st
             "landings_off": sum(c.landings_off for c in cells),
         }
     return out
+
+
+def push_words(p: PushCell | None) -> str:
+    """One push survival in a table cell: "94 / 96" (survives / topples at, N)."""
+    if p is None:
+        return DASH
+    if p.survived is None:
+        return "falls unpushed"
+    if p.failed is None:
+        return f">= {p.survived:.0f} / —"
+    return f"{p.survived:.0f} / {p.failed:.0f}"
+
+
+ORDER_WORDS = {-1: "more", 0: "tie", 1: "less"}  # the MPC against another method
 
 
 def criterion_words(name: str) -> str:
@@ -166,11 +194,16 @@ def threshold_words(s: SensitivitySection) -> str:
     )
 
 
-AUTHORS_WORDS = (
-    "0.18 s on both feet at each end of a 1.2 s step, i.e. `walk.dsp_ratio` = 0.30 with "
-    "`walk.dsp_split` = both_ends, and half a step width of 0.1278 m (`walk.step_width` = "
-    "0.2556); their 0.06 s rest within the step has no counterpart in our plan"
-)
+def authors_words() -> str:
+    """The authors' DSP and step width (:data:`~app.experiments.definitions.AUTHORS`) in words."""
+    end = AUTHORS_DSP * _P.walk.step_time / 2
+    split = dict(AUTHORS)["walk.dsp_split"]
+    return (
+        f"{end:g} s on both feet at each end of a {_P.walk.step_time:g} s step, i.e. "
+        f"`walk.dsp_ratio` = {AUTHORS_DSP:.2f} with `walk.dsp_split` = {split}, and half a step "
+        f"width of {AUTHORS_WIDTH / 2:g} m (`walk.step_width` = {AUTHORS_WIDTH:g}); their "
+        f"{AUTHORS_REST:g} s rest within the step has no counterpart in our plan"
+    )
 
 
 def _environment() -> jinja2.Environment:
@@ -205,14 +238,26 @@ def _environment() -> jinja2.Environment:
         step_width=_P.walk.step_width,
         joint_groups=joint_groups,
         verdict_cell=verdict_cell,
+        DEPENDS=DEPENDS,
         robustness_totals=robustness_totals,
+        push_words=push_words,
+        falls_p=falls_p,
+        stability=stability,
+        order_words=ORDER_WORDS,
+        trade_words=trade_words,
         criterion_words=criterion_words,
         threshold_words=threshold_words,
         std_p=std_gap_p,
         BOOTSTRAP=BOOTSTRAP,
         authors=[list(a) for a in AUTHORS],
-        authors_words=AUTHORS_WORDS,
+        authors_words=authors_words(),
+        authors_end_s=AUTHORS_DSP * _P.walk.step_time / 2,
+        authors_dsp=AUTHORS_DSP,
+        push_share=DISTURBANCE / (TOTAL_MASS * GRAVITY),
+        landing_window=LANDING_WINDOW,
+        near_below=NEAR_BELOW,
         anticipation_min=ANTICIPATION_MIN,
+        early_turn_min=EARLY_TURN_MIN,
         lateral_modes=LATERAL_MODES,
         lateral_words=lateral_words(),
         horizon=_P.com.horizon,
@@ -233,5 +278,6 @@ def render(study: Study, results: StudyResults) -> str:
             r=results,
             energy_note=energy_note(results),
             summary=summary_lines(study, results),
+            plain=plain(study, results),
         )
     )

@@ -20,6 +20,7 @@ from app.experiments.balance import BalanceSection, ZmpSection
 from app.experiments.energy import EnergySection
 from app.experiments.kappa import KappaSection
 from app.experiments.limits import EquivalentLengths, KinematicsSection, MaxStep
+from app.experiments.paper import numbers as paper_numbers
 from app.experiments.robustness import RobustnessSection
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.waist import LateralSection, WaistSection
@@ -29,7 +30,7 @@ from app.sim.summary import TIMING_KEYS as RUN_TIMING_KEYS
 
 # keys whose values measure time or the machine, not the robot: they differ between two runs
 # of the same study (on any backend)
-TIMING_KEYS = ("meta", "wall_s", "duration_s", *RUN_TIMING_KEYS)
+TIMING_KEYS = ("meta", "wall_s", "duration_s", "cpu_s", *RUN_TIMING_KEYS)
 
 
 @dataclass(frozen=True)
@@ -44,8 +45,13 @@ class ClaimResult:
     verdict: str  # "holds", "partly", "does not hold" or "not measured"
     rule: str
     measured: dict[str, Any]  # the numbers the rule read
-    # the verdict on another reading of the same numbers (e.g. energy at 1 ms) -> verdict
+    # reading -> verdict, when the claim is judged on other readings of the same numbers (e.g.
+    # the energy at 1 ms); with the main reading's when they disagree (verdict DEPENDS)
     variants: dict[str, str] = field(default_factory=dict)
+    readings: dict[str, str] = field(default_factory=dict)  # another reading -> our numbers
+    reading: str = ""  # the main reading's name (``ours`` is on it), when there are others
+    why: str = ""  # why the readings disagree (verdict DEPENDS)
+    check: str = ""  # not empty: a consistency check (not counted), and why
 
 
 @dataclass(frozen=True)
@@ -63,6 +69,7 @@ class Meta:
     backend: str = ""  # where the runs ran (app.sweep.engine)
     load_average: float | None = None  # the machine's 1-minute load average at the end
     load_average_start: float | None = None  # ... and when the runs started
+    cpu_s: float | None = None  # CPU time of the runs, all processes (local pool only) [s]
 
 
 @dataclass(frozen=True)
@@ -96,9 +103,20 @@ class StudyResults:
     claims: list[ClaimResult] = field(default_factory=list)
     runs: dict[str, RunRecord] = field(default_factory=dict)
     figures: dict[str, str] = field(default_factory=dict)  # name -> file in figures/
+    paper: dict[str, Any] = field(default_factory=paper_numbers)  # the paper's, from paper.py
 
     def claims_of(self, section: str) -> list[ClaimResult]:
         return [c for c in self.claims if c.section == section]
+
+    @property
+    def tallied(self) -> list[ClaimResult]:
+        """The claims judged as results (the tally), without the consistency checks."""
+        return [c for c in self.claims if not c.check]
+
+    @property
+    def checks(self) -> list[ClaimResult]:
+        """The consistency checks: judged, listed apart, not counted."""
+        return [c for c in self.claims if c.check]
 
 
 def _json_safe(obj: Any) -> Any:

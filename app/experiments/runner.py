@@ -5,11 +5,13 @@ with ``--ray [ADDRESS]``), as jobs of plain data: :func:`worker.execute` on a
 :class:`~app.run_spec.RunSpec` for the study's runs, ``app.sweep.measure.run_one`` for the
 sensitivity section's limit searches, :func:`robustness.push_job` for the push survival.
 
-Two phases, so the adaptive parts never wait at the end: first the push bisections and every
-run known up front except Table 1's (:func:`definitions.planned_runs`: the coarse sweep, the
-figure runs), longest first; then the sensitivity section's searches (each a chain of runs,
-served first), the sweep's refinement between each method's last clean and first failed
-coarse length (:func:`definitions.refinement_runs`), and Table 1's seeded repeats. Then
+Three phases, so the adaptive parts never wait at the end: first the push bisections and every
+unseeded run known up front (:func:`definitions.planned_runs`: the coarse sweep, the figure
+runs), longest first; then the sensitivity section's searches (each a chain of runs, served
+first), the sweep's refinement between each method's last clean and first failed coarse length
+(:func:`definitions.refinement_runs`), and Table 1's seeded repeats; then the push bisections
+in the sensitivity cells whose gain the report states (:func:`robustness.trade_cells`, known
+once the searches are done) beside the seeded walks under larger pushes. Then
 :func:`analysis.analyse`, the figures, ``results.json`` and ``report.md``.
 """
 
@@ -27,10 +29,17 @@ from app.experiments import sensitivity
 from app.experiments.analysis import analyse
 from app.experiments.definitions import FULL, QUICK, Requests, Study, planned_runs, refinement_runs
 from app.experiments.results import Meta, StudyResults, to_json
-from app.experiments.robustness import PushCell, push_cell, push_job
-from app.experiments.runs import Results, case_key
+from app.experiments.robustness import (
+    PushCell,
+    push_cell,
+    push_job,
+    push_key,
+    trade_cells,
+    trade_jobs,
+)
+from app.experiments.runs import Results
 from app.experiments.worker import execute
-from app.run_spec import RunSpec
+from app.run_spec import Override, RunSpec
 from app.sweep.engine import Backend, OneJob, Task, make_backend, run_tasks
 
 PROG = "pelvic-walk experiments"
@@ -51,36 +60,44 @@ def _push_jobs(study: Study) -> list[tuple[str, OneJob]]:
         return []
     return [
         (
-            case_key(m, x),
-            OneJob(push_job, m, x, p.direction, p.duration, p.resolution, label=f"push {m} {x}"),
+            push_key(m, x, d),
+            OneJob(
+                push_job, m, x, d, p.duration, p.resolution, p.f_high, label=f"push {m} {x} {d}"
+            ),
         )
         for x in p.lengths
+        for d in p.directions
         for m in study.methods
     ]
 
 
 @dataclasses.dataclass
 class StudyRuns:
-    """Everything the runs gave: each run's result, the sensitivity section, the pushes."""
+    """Everything the runs gave: each run's result, the sensitivity section, the pushes (and
+    those in the sensitivity cells of the trade)."""
 
     results: Results
     sensitivity: sensitivity.SensitivitySection | None
     pushes: dict[str, PushCell | None]
     n_jobs: int
     seconds: float
+    cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] = dataclasses.field(
+        default_factory=dict
+    )
 
 
 def run_study(study: Study, backend: Backend) -> StudyRuns:
     """Every run of the study on ``backend`` (see the module docstring for the order)."""
     t0 = time.perf_counter()
     requests = planned_runs(study)
-    table1 = {s for s in requests if s.seed is not None}
-    first = _run_jobs({s: e for s, e in requests.items() if s not in table1}, study)
+    seeded = {s for s in requests if s.seed is not None}
+    table1 = {s for s in seeded if s.push_std is None}
+    first = _run_jobs({s: e for s, e in requests.items() if s not in seeded}, study)
     pushes = _push_jobs(study)
     tasks: list[Task] = []
     tasks.extend(t for _, t in pushes)
     tasks.extend(t for _, t in first)
-    n = run_tasks(tasks, backend, desc=f"experiments ({study.name}, 1/2: {backend.name})")
+    n = run_tasks(tasks, backend, desc=f"experiments ({study.name}, 1/3: {backend.name})")
     results: Results = {s: t.result for s, t in first}
 
     clean = {
@@ -99,16 +116,29 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
     tasks = []
     tasks.extend(t for _, _, t in sens_plan)
     tasks.extend(t for _, t in second)
-    n += run_tasks(tasks, backend, desc=f"experiments ({study.name}, 2/2: {backend.name})")
+    n += run_tasks(tasks, backend, desc=f"experiments ({study.name}, 2/3: {backend.name})")
     results.update({s: t.result for s, t in second})
     sens_runs = sum(t.runs for _, _, t in sens_plan)
     sens_s = sum(t.wall_s for _, _, t in sens_plan)
+    sens = sensitivity.section(study, sens_plan, sens_runs, sens_s)
+
+    # the push margin in the sensitivity cells whose gain the report states (known now), and
+    # the walks under larger pushes
+    cell_jobs = {
+        key: OneJob(push_job, *args, label=f"push {' '.join(map(str, key))}")
+        for key, args in trade_jobs(study, trade_cells(study, sens)).items()
+    }
+    third = _run_jobs({s: requests[s] for s in seeded - table1}, study)
+    tasks = [*cell_jobs.values(), *(t for _, t in third)]
+    n += run_tasks(tasks, backend, desc=f"experiments ({study.name}, 3/3: {backend.name})")
+    results.update({s: t.result for s, t in third})
     return StudyRuns(
         results=results,
-        sensitivity=sensitivity.section(study, sens_plan, sens_runs, sens_s),
+        sensitivity=sens,
         pushes={k: push_cell(t.result) for k, t in pushes},
         n_jobs=n,
         seconds=time.perf_counter() - t0,
+        cell_pushes={k: push_cell(t.result) for k, t in cell_jobs.items()},
     )
 
 
@@ -134,6 +164,7 @@ def main(out: Path, quick: bool = False, jobs: int | None = None, ray: str | Non
     (out / "figures").mkdir(parents=True, exist_ok=True)
     started = datetime.now(UTC)
     t0 = time.perf_counter()
+    cpu0 = cpu_seconds()
     load_start = os.getloadavg()[0]
     try:
         backend = make_backend(ray, n_jobs, n_tasks=n_jobs)
@@ -153,7 +184,7 @@ def main(out: Path, quick: bool = False, jobs: int | None = None, ray: str | Non
         + (runs.sensitivity.duration_s if runs.sensitivity else 0.0),
         n_runs=len(runs.results)
         + (runs.sensitivity.n_runs if runs.sensitivity else 0)
-        + sum(p.runs for p in runs.pushes.values() if p),
+        + sum(p.runs for p in [*runs.pushes.values(), *runs.cell_pushes.values()] if p),
         jobs=n_jobs,
         cpu_count=os.cpu_count(),
         machine=f"{platform.machine()}, {platform.python_implementation()} "
@@ -161,8 +192,18 @@ def main(out: Path, quick: bool = False, jobs: int | None = None, ray: str | Non
         errors={s.key: r.error for s, r in runs.results.items() if r.error},
         backend=backend.name,
         load_average_start=load_start,
+        cpu_s=cpu_seconds() - cpu0 if ray is None else None,
     )
     return finish(out, study, runs, meta, t0)
+
+
+def cpu_seconds() -> float:
+    """CPU time of this process and of its finished children (the local pool's workers once
+    it is shut down; Ray's workers are not children) [s]."""
+    import resource
+
+    own, kids = (resource.getrusage(w) for w in (resource.RUSAGE_SELF, resource.RUSAGE_CHILDREN))
+    return own.ru_utime + own.ru_stime + kids.ru_utime + kids.ru_stime
 
 
 def finish(out: Path, study: Study, runs: StudyRuns, meta: Meta, t0: float) -> int:
@@ -170,7 +211,7 @@ def finish(out: Path, study: Study, runs: StudyRuns, meta: Meta, t0: float) -> i
     from app.experiments import figures
     from app.report_dir import record_report_dir
 
-    data = analyse(study, runs.results, meta, runs.sensitivity, runs.pushes)
+    data = analyse(study, runs.results, meta, runs.sensitivity, runs.pushes, runs.cell_pushes)
     data = dataclasses.replace(
         data, figures=figures.make_all(study, runs.results, data, out / "figures")
     )

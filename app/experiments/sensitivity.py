@@ -76,8 +76,14 @@ def _without_defaults(overrides: tuple[Override, ...]) -> tuple[Override, ...]:
     )
 
 
+def reads(method: str, overrides: tuple[Override, ...]) -> tuple[Override, ...]:
+    """The overrides ``method`` reads that are off their defaults: equal for runs that are
+    the same run."""
+    return _without_defaults(effective(method, overrides))
+
+
 def _key(method: str, overrides: tuple[Override, ...]) -> tuple[str, tuple[Override, ...]]:
-    return method, _without_defaults(effective(method, overrides))
+    return method, reads(method, overrides)
 
 
 @dataclass(frozen=True)

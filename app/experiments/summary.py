@@ -1,6 +1,11 @@
-"""The report's summary at the top: the headline numbers, what holds, what does not and why,
-one line per topic, written from the analysed results (a line whose numbers are missing is
-left out)."""
+"""The report's summary at the top: a plain paragraph for a reader who has not read the
+glossary, then the headline numbers, what holds, what does not and why, one line per topic,
+written from the analysed results (a line whose numbers are missing is left out).
+
+Every gain the summary states carries its trade beside it (:func:`trade_words`: k_pel, the
+MPC's waist amplitude, the push margin against the fixed pelvis); every paper number comes
+from :mod:`app.experiments.paper`, every measured one from the results.
+"""
 
 from __future__ import annotations
 
@@ -12,17 +17,21 @@ import numpy as np
 from app.experiments import paper
 from app.experiments.definitions import AUTHORS, Study
 from app.experiments.results import ClaimResult, StudyResults
+from app.experiments.robustness import PushCell, RobustnessSection, TradeRow, stability
 from app.experiments.runs import case_key
-from app.experiments.verdicts import FAILS, HOLDS, NOT_MEASURED, PARTLY
+from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
+from app.run_spec import DISTURBANCE
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
 
 GAIN = paper.MAX_STEP["mpc"] - paper.MAX_STEP["fixed"]  # [m] the paper's gain
+_CHEAP = paper.ENERGY_ROTATION_CHEAPER_UP_TO
+_DEAR = [x for x in paper.TABLE1_LENGTHS if _CHEAP < x <= paper.MAX_STEP["fixed"] + 1e-9]
 ENERGY_CLAIMS = {  # id -> in a few words
     "energy_std": "the MPC's smaller std",
     "energy_std_gap_grows": "the std gap growing with the length",
     "energy_mpc_below_redundancy": "the MPC below redundancy",
-    "energy_short": "rotation cheaper up to 0.20 m",
-    "energy_mid": "rotation dearer at 0.25-0.30 m",
+    "energy_short": f"rotation cheaper up to {_CHEAP:.2f} m",
+    "energy_mid": f"rotation dearer at {_DEAR[0]:.2f}-{_DEAR[-1]:.2f} m",
     "energy_least": "the MPC the least",
 }
 
@@ -40,6 +49,125 @@ def _m(v: float | None, spec: str = ".2f") -> str:
     return "-" if v is None else format(v, spec)
 
 
+def _survived(p: PushCell | None) -> float | None:
+    return None if p is None else p.survived
+
+
+def trade_words(t: TradeRow) -> str:
+    """What a gain costs, in words: k_pel, the MPC's waist amplitude against the paper's, and
+    the largest push the MPC survives against the fixed pelvis's, each direction."""
+    text = f"k_pel = {t.k_pel:g}"
+    if t.waist_deg is not None:
+        text += (
+            f", the MPC's waist swings {t.waist_deg:.1f} deg at {t.waist_length:.2f} m (the "
+            f"paper's {paper.WAIST_PEAK_DEG:.0f} deg)"
+        )
+    pushes = []
+    for d, by in t.pushes.items():
+        m, f = _survived(by.get("mpc")), _survived(by.get("fixed"))
+        if m is not None and f is not None:
+            pushes.append(f"{m:.0f} against {f:.0f} N to the {d} ({m - f:+.0f} N)")
+    if pushes:
+        text += (
+            f", and the largest push it survives at {t.push_length:.2f} m is "
+            + ", ".join(pushes)
+            + " of the fixed pelvis's"
+        )
+    return text
+
+
+def _trade_of(r: StudyResults, name: str) -> TradeRow | None:
+    rob = r.robustness
+    return next((t for t in rob.trade if t.name == name), None) if rob else None
+
+
+def _push_tally(rob: RobustnessSection, other: str) -> tuple[int, int, int]:
+    """(pushes where the MPC survives more, less, of all) against ``other``."""
+    pushes = [c for c in stability(rob, "mpc", other) if c.what.startswith("push")]
+    return (
+        sum(c.order < 0 for c in pushes),
+        sum(c.order > 0 for c in pushes),
+        len(pushes),
+    )
+
+
+def _heavy_falls(rob: RobustnessSection) -> tuple[str, dict[str, Any]] | None:
+    """The largest push size's falls (its key and cells), when it is larger than the study's."""
+    sizes = [k for k in rob.falls if rob.falls[k] and k != f"{DISTURBANCE:g} N"]
+    return (sizes[-1], rob.falls[sizes[-1]]) if sizes else None
+
+
+def plain(study: Study, r: StudyResults) -> str | None:
+    """The first paragraph: what the paper says and what we found, in plain words."""
+    ms = r.max_step
+    f, m = ms["fixed"].longest_clean, ms["mpc"].longest_clean
+    if f is None or m is None:
+        return None
+    pf, pm = paper.MAX_STEP["fixed"], paper.MAX_STEP["mpc"]
+    text = (
+        "The paper proposes that a humanoid robot turn its pelvis (its hips, about the "
+        "vertical) while it walks, planned a moment ahead by a model-predictive controller "
+        "(*MPC*: at every instant it predicts where the body and feet will be over the next "
+        "second or so and chooses the turn that fits them), so that each leg reaches "
+        "further and the robot can take longer steps. It compares this with the pelvis held "
+        "straight (*fixed*) and with the authors' earlier method, which turns the pelvis only "
+        "as far as the feet need at each instant (*redundancy*). On our simulated robot the "
+        f"longest step the MPC takes without a fault is {m:.2f} m against {f:.2f} m with the "
+        f"pelvis held straight ({100 * (m / f - 1):+.0f} %; the paper: {pm:.2f} against "
+        f"{pf:.2f} m, {100 * (pm / pf - 1):+.0f} %)."
+    )
+    rob = r.robustness
+    if rob is not None and rob.pushes:
+        more, less, n = _push_tally(rob, "fixed")
+        if n:
+            x = rob.push_setup.trade_length if rob.push_setup else rob.push_lengths[0]
+            d = rob.directions[0]
+            mp, fp = _survived(rob.push("mpc", x, d)), _survived(rob.push("fixed", x, d))
+            example = (
+                f" (at {x:.2f} m, pushed to the {d}: {mp:.0f} N against {fp:.0f} N)"
+                if mp is not None and fp is not None
+                else ""
+            )
+            if less > more:
+                text += (
+                    " The turning pelvis has a price: shoved sideways, the MPC robot topples at "
+                    f"a smaller shove than the one with a straight pelvis in {less} of {n} "
+                    f"cases{example}"
+                )
+            else:
+                text += (
+                    " Shoved sideways, the MPC robot withstands at least the shoves the one "
+                    f"with a straight pelvis does in {n - less} of {n} cases{example}"
+                )
+            heavy = _heavy_falls(rob)
+            if heavy and "mpc" in heavy[1] and "fixed" in heavy[1]:
+                cm, cf = heavy[1]["mpc"], heavy[1]["fixed"]
+                text += (
+                    f", and under random shoves {heavy[0]} strong it falls in {cm.fell} of "
+                    f"{cm.runs} walks against {cf.fell} of {cf.runs}"
+                )
+            text += "."
+    count = {v: sum(c.verdict == v for c in r.tallied) for v in (HOLDS, PARTLY, FAILS, DEPENDS)}
+    text += (
+        f" Of the paper's {len(r.tallied)} claims we test, {count[HOLDS]} hold, {count[PARTLY]} "
+        f"hold in part and {count[FAILS]} do not"
+        + (
+            f"; {count[DEPENDS]} (about energy) "
+            + ("depends" if count[DEPENDS] == 1 else "depend")
+            + " on how often the energy is sampled"
+            if count[DEPENDS]
+            else ""
+        )
+        + "."
+    )
+    if r.checks:
+        text += (
+            f" {len(r.checks)} more rows only check that our set-up reproduces what it was "
+            "chosen to reproduce; they are listed apart."
+        )
+    return text
+
+
 def _limits(study: Study, r: StudyResults) -> str | None:
     ms = r.max_step
     f, red, m = (ms[k].longest_clean for k in ("fixed", "redundancy", "mpc"))
@@ -54,11 +182,17 @@ def _limits(study: Study, r: StudyResults) -> str | None:
     )
     if f > paper.MAX_STEP["fixed"] + 1e-9 and m - f < GAIN - 1e-9:
         text += " Our fixed pelvis reaches farther than the paper's, so the gain is smaller."
+    default = _trade_of(r, "the defaults")
+    if default:
+        text += f" The cost of that gain: {trade_words(default)} (section 8)."
     s = r.sensitivity
     best = s.best_gain() if s else None
     if s and best:
         hits = s.cells_with_gain(GAIN)
         text += f" Over the sensitivity grid the gain reaches {best[0]:+.2f} m ({best[1]})"
+        t = _trade_of(r, best[1])
+        if t:
+            text += f", where {trade_words(t)}"
         text += (
             f"; +{GAIN:.2f} m or more in {len(hits)} of {len(s.all_cells())} cells"
             if hits
@@ -66,7 +200,17 @@ def _limits(study: Study, r: StudyResults) -> str | None:
         )
         authors = s.gain([list(a) for a in AUTHORS])
         if authors is not None:
-            text += f"; with the authors' DSP and step width {authors:+.2f} m"
+            text += f". With the authors' DSP and step width the gain is {authors:+.2f} m"
+            t = next(
+                (
+                    t
+                    for t in (r.robustness.trade if r.robustness else [])
+                    if sorted(map(tuple, t.overrides)) == sorted(AUTHORS)
+                ),
+                None,
+            )
+            if t:
+                text += f" ({trade_words(t)})"
         text += " (section 9)."
     return text
 
@@ -81,23 +225,32 @@ def _robustness(study: Study, r: StudyResults) -> str | None:
         parts.append(f"{m} {sum(c.fell for c in cells)}/{sum(c.runs for c in cells)}")
         off.append(f"{m} {sum(c.off_foothold for c in cells)}")
     worst = [c.worst_landing_cm for c in rob.cells.values() if c and c.worst_landing_cm]
+    c = _claim(r, "stability")
     text = (
-        f"**Robustness (section 8).** Table 1's seeded repeats ({rob.repeats} per method and "
-        f"length, {rob.lengths[0]:.2f}-{rob.lengths[-1]:.2f} m, a 5 N random push on the "
+        "**Stability (Sec. VII, section 8): "
+        + (f"the MPC more stable than redundancy {c.verdict}.** " if c else "** ")
+        + f"Table 1's seeded repeats ({rob.repeats} per method and length, "
+        f"{rob.lengths[0]:.2f}-{rob.lengths[-1]:.2f} m, a {DISTURBANCE:g} N random push on the "
         f"torso throughout): runs that fell: {', '.join(parts)}; that did not fall but landed a "
         f"foot more than {LANDING_ERROR_CLEAN * 100:.0f} cm off: {', '.join(off)}"
         + (f" (worst {max(worst):.1f} cm)." if worst else ".")
     )
-    pushes = [p for p in rob.pushes.values() if p is not None]
-    if pushes:
-        x = sorted({p.step_length for p in pushes})[len({p.step_length for p in pushes}) // 2]
-        at = {p.method: p for p in pushes if abs(p.step_length - x) < 1e-9}
-        words = [
-            f"{m} {'falls unpushed' if p.survived is None else f'{p.survived:.0f} N'}"
-            for m in study.methods
-            if (p := at.get(m)) is not None
-        ]
-        text += f" Largest sideways push survived at {x:.2f} m: {', '.join(words)}."
+    heavy = _heavy_falls(rob)
+    if heavy:
+        size, by = heavy
+        text += (
+            f" Under pushes of {size}: fell "
+            + ", ".join(f"{m} {by[m].fell}/{by[m].runs}" for m in study.methods if m in by)
+            + "."
+        )
+    if rob.pushes:
+        for other in ("redundancy", "fixed"):
+            more, less, n = _push_tally(rob, other)
+            if n:
+                text += (
+                    f" Largest sideways push survived, the MPC against {other}: more in {more}, "
+                    f"less in {less} of {n} (lengths and directions)."
+                )
     return text
 
 
@@ -106,7 +259,7 @@ def _waist(study: Study, r: StudyResults) -> str | None:
     if c is None or not c.measured:
         return None
     d = c.measured
-    amp = _claim(r, "waist_amplitude")
+    amp, why = _claim(r, "waist_amplitude"), _claim(r, "waist_from_prediction")
 
     def when(lead: float) -> str:
         if abs(lead) < 0.005 + 1e-9:
@@ -117,13 +270,21 @@ def _waist(study: Study, r: StudyResults) -> str | None:
         f"**Waist (Fig. 8-9): the early turn {c.verdict}.** The MPC's turn toward the coming "
         f"swing starts {when(d['mpc_lead'])}, redundancy's {when(d['red_lead'])} (rate at "
         f"lift-off {d['mpc_rate']:+.0f} vs {d['red_rate']:+.0f} deg/s toward the swing). "
-        f"Its size: the MPC's waist moves {d['mpc_share']:.1f} % of its range in the DSP, "
-        f"{d['mpc_of_sine']:.0%} of what a sine over the step moves."
+        f"Its size before the lift-off: {d['mpc_early']:.1f} % of the waist's range, "
+        f"{d['mpc_of_sine_percent']:.0f} % of what a sine over the step moves "
+        f"({d['sine']:.1f} %); redundancy's {d['red_early']:.1f} %."
     )
+    if why and why.measured:
+        w = why.measured
+        text += (
+            f" Does it come from the prediction: {why.verdict} (with the reference from the "
+            f"state now, no prediction: {w['abl_early']:+.1f} % of the range)."
+        )
     if amp and amp.measured:
         text += (
             f" Amplitude {amp.measured['peak']:.1f} deg at {paper.WAIST_PEAK_LENGTH:.2f} m "
-            f"(paper {paper.WAIST_PEAK_DEG:.0f}): {amp.verdict}."
+            f"(paper {paper.WAIST_PEAK_DEG:.0f}): {amp.verdict}, a check (k_pel was chosen to "
+            "give it)."
         )
     return text
 
@@ -132,27 +293,40 @@ def _energy(study: Study, r: StudyResults) -> str | None:
     claims = [c for cid in ENERGY_CLAIMS if (c := _claim(r, cid)) and c.verdict != NOT_MEASURED]
     if not claims:
         return None
-    counts = {v: sum(c.verdict == v for c in claims) for v in (HOLDS, PARTLY, FAILS)}
+    counts = {v: sum(c.verdict == v for c in claims) for v in (HOLDS, PARTLY, FAILS, DEPENDS)}
     ties = sum(c.measured.get("ties", 0) for c in claims)
     comparisons = sum(c.measured.get("n", 0) for c in claims if "ties" in c.measured)
-    changed = [
-        f"{ENERGY_CLAIMS[c.id]} ({c.verdict} -> {c.variants['1 ms']})"
+    depends = [
+        f"{ENERGY_CLAIMS[c.id]} (" + ", ".join(f"{v} at {k}" for k, v in c.variants.items()) + ")"
         for c in claims
-        if c.variants and c.variants.get("1 ms") != c.verdict
+        if c.verdict == DEPENDS
     ]
     means = [c.mean for row in r.energy.table.values() for c in row.values() if c.mean]
+    theirs = [c.mean for row in paper.TABLE1.values() for c in row.values() if c]
     text = (
         f"**Energy (Table 1):** of {len(claims)} energy claims {counts[HOLDS]} hold, "
-        f"{counts[PARTLY]} partly, {counts[FAILS]} do not. {ties} of {comparisons} orderings "
-        "are ties: our methods' means differ by less than the repeats' spread, most at the "
-        "short lengths"
+        f"{counts[PARTLY]} partly, {counts[FAILS]} do not"
+        + (
+            f", {counts[DEPENDS]} "
+            + ("depends" if counts[DEPENDS] == 1 else "depend")
+            + " on the reading"
+            if counts[DEPENDS]
+            else ""
+        )
+        + f". {ties} of {comparisons} orderings are ties: our methods' means differ by less "
+        "than the repeats' spread, most at the short lengths"
     )
     if means:
-        text += f"; our windows cost {min(means):.0f}-{max(means):.0f} J (the paper's 10-941 J)"
+        text += (
+            f"; our windows cost {min(means):.0f}-{max(means):.0f} J (the paper's "
+            f"{min(theirs):.0f}-{max(theirs):.0f} J)"
+        )
     text += (
-        f". On the energy at 1 ms instead of 200 Hz the verdict changes for {'; '.join(changed)}."
-        if changed
-        else ". The verdicts are the same on the energy at 1 ms."
+        ". Depending on whether the energy is sampled at 200 Hz or every 1 ms: "
+        + "; ".join(depends)
+        + " (section 5 says why)."
+        if depends
+        else ". The verdicts are the same on the energy at 200 Hz and at 1 ms."
     )
     return text
 
@@ -172,7 +346,7 @@ def _kappa(study: Study, r: StudyResults) -> str | None:
         text += (
             f"; past our fixed pelvis's own limit ({o['lc']:.2f} m) it reaches "
             f"{o['fixed_past']:.3g} at {o['ff']:.2f} m against the MPC's {o['mpc_past']:.3g}: "
-            f"{own.verdict}"
+            f"{own.verdict}, a check (the clean rule that sets the limit implies it)"
         )
     return text + "."
 
@@ -213,18 +387,40 @@ def _zmp(study: Study, r: StudyResults) -> str | None:
 
 
 def _verdicts(study: Study, r: StudyResults) -> str | None:
-    if not r.claims:
+    tallied = r.tallied
+    if not tallied:
         return None
-    count = {v: sum(c.verdict == v for c in r.claims) for v in (HOLDS, PARTLY, FAILS, NOT_MEASURED)}
-    fails = [c.claim for c in r.claims if c.verdict == FAILS]
+    count = {
+        v: sum(c.verdict == v for c in tallied)
+        for v in (HOLDS, PARTLY, FAILS, DEPENDS, NOT_MEASURED)
+    }
+    fails = [c.claim for c in tallied if c.verdict == FAILS]
+    depends = [c.claim for c in tallied if c.verdict == DEPENDS]
     text = (
-        f"**All {len(r.claims)} claims:** {count[HOLDS]} hold, {count[PARTLY]} partly, "
+        f"**All {len(tallied)} claims:** {count[HOLDS]} hold, {count[PARTLY]} partly, "
         f"{count[FAILS]} do not hold"
+        + (
+            f", {count[DEPENDS]} "
+            + ("depends" if count[DEPENDS] == 1 else "depend")
+            + " on the energy's reading"
+            if count[DEPENDS]
+            else ""
+        )
         + (f", {count[NOT_MEASURED]} not measured" if count[NOT_MEASURED] else "")
         + "."
     )
     if fails:
         text += " Not holding: " + "; ".join(fails) + "."
+    if depends:
+        text += " Depending on the reading: " + "; ".join(depends) + "."
+    if r.checks:
+        text += (
+            f" Besides them {len(r.checks)} consistency "
+            + ("check" if len(r.checks) == 1 else "checks")
+            + " (not counted): "
+            + "; ".join(f"{c.claim} ({c.verdict})" for c in r.checks)
+            + "."
+        )
     return text
 
 

@@ -4,7 +4,12 @@ A :class:`Rule` is data: the :class:`Bound` s that must all be met for "holds" (
 ``any_holds``), and those for "partly". :func:`verdict` applies a rule to the numbers a claim
 measured; a claim whose numbers are missing is "not measured". A bound on NaN or None is not met.
 A :class:`Claim` ties a claim of the paper to its measurement and rule (the table of them is
-:data:`app.experiments.claims.CLAIMS`).
+:data:`app.experiments.claims.CLAIMS`). A claim judged on other readings of the same numbers
+(its ``variants``, e.g. the energy at 1 ms) holds, partly holds or does not only where every
+reading agrees; otherwise its verdict is :data:`DEPENDS`, with each reading's verdict. A
+*consistency check* (``check``: why) is judged the same way but is not a result: its inputs
+were chosen to match the paper, or it follows from another rule; it is listed apart and not
+counted.
 """
 
 from __future__ import annotations
@@ -21,7 +26,8 @@ from app.experiments.results import ClaimResult, StudyResults
 Measure = Callable[[Study, StudyResults], dict[str, Any] | None]
 
 HOLDS, PARTLY, FAILS, NOT_MEASURED = "holds", "partly", "does not hold", "not measured"
-VERDICTS = (HOLDS, PARTLY, FAILS, NOT_MEASURED)
+DEPENDS = "depends on the reading"  # the readings of the same numbers disagree
+VERDICTS = (HOLDS, PARTLY, FAILS, DEPENDS, NOT_MEASURED)
 _OPS = {
     ">": operator.gt,
     ">=": operator.ge,
@@ -132,13 +138,35 @@ class Claim:
     # other readings of the same numbers, judged by the same rule (e.g. "1 ms": the energy
     # from every 1 ms substep instead of 200 Hz samples)
     variants: Mapping[str, Measure] = field(default_factory=dict)
+    reading: str = ""  # the main reading's name, when there are variants (e.g. "200 Hz")
+    why_readings: str = ""  # why the readings can disagree (said when they do)
+    check: str = ""  # not empty: a consistency check, not a result; why
 
     def judge(self, study: Study, r: StudyResults) -> ClaimResult:
         measured = self.measure(study, r)
         rule = self.rule.words(self.names) + (f" ({self.note})" if self.note else "")
         ours = self.ours.format(**measured) if measured is not None else "-"
         v = verdict(measured, self.rule)
-        variants = {name: verdict(m(study, r), self.rule) for name, m in self.variants.items()}
+        variants, readings = {}, {}
+        for name, m in self.variants.items():
+            other = m(study, r)
+            variants[name] = verdict(other, self.rule)
+            readings[name] = self.ours.format(**other) if other is not None else "-"
+        if v != NOT_MEASURED and any(x != v for x in variants.values()):
+            variants = {self.reading or "main": v, **variants}
+            v = DEPENDS
         return ClaimResult(
-            self.id, self.section, self.claim, self.paper, ours, v, rule, measured or {}, variants
+            self.id,
+            self.section,
+            self.claim,
+            self.paper,
+            ours,
+            v,
+            rule,
+            measured or {},
+            variants,
+            readings=readings,
+            reading=self.reading,
+            why=self.why_readings if v == DEPENDS else "",
+            check=self.check,
         )

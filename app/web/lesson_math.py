@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import math
 
+from app.web import lesson_numbers
+
 
 # -- a tiny MathML builder ----------------------------------------------------------------------
 def _el(tag: str, *children: str) -> str:
@@ -319,6 +321,8 @@ def analysis_html(theta_deg: float, clean_limits: dict[str, float]) -> str:
     """The drawing with the numbers and what they mean (one percentage per reading)."""
     n = analysis_numbers(theta_deg)
     ours = 100.0 * (clean_limits["mpc"] / clean_limits["fixed"] - 1.0)
+    k, lim = lesson_numbers.paper()["kinematics"], lesson_numbers.paper_limits()
+    theta_p = lesson_numbers.paper()["robot"]["theta_pel_deg"]
     return f"""{analysis_svg(theta_deg)}
 <div style="font: 12.5px/1.45 sans-serif; margin-top: 6px">
 <b>Eq. 4</b> (pelvis fixed, knee straight at landing): <b>{n["eq4"]:.3f} m</b>.<br/>
@@ -326,16 +330,19 @@ def analysis_html(theta_deg: float, clean_limits: dict[str, float]) -> str:
 sin θ = {1000 * n["dhc_printed"]:.0f} mm: <b>{n["eq5_printed"]:.3f} m</b>
 (+{n["gain_printed"]:.0f} %)</span>; that is what the drawing shows: turning about its centre,
 the swing hip moves ahead by half of eq. 2's hip advance.<br/>
-<span style="color:#e8710a"><b>The reading that gives the paper's 0.42 m</b> (at 45°):
+<span style="color:#e8710a"><b>The reading that gives the paper's {k["step_max_rotation"]:.2f} m</b>
+(at {theta_p:.0f}°):
 Δd*<sub>hc</sub> = l<sub>pel</sub> sin θ cos θ = {1000 * n["dhc_paper"]:.0f} mm:
 <b>{n["eq5_paper"]:.3f} m</b> (+{n["gain_paper"]:.0f} %)</span>.<br/>
 <b>Eq. 2</b>: the hips are l<sub>pel</sub> sin θ = {1000 * n["hip_advance"]:.0f} mm apart
 along x, but the step gains only the swing hip's lead over the pelvis centre (which stays over
 the support foot): half of it as printed, up to l<sub>pel</sub>/2 = {500 * n["l_pel"]:.0f} mm
 as the paper evaluates it.<br/>
-At 45° the paper's reading gives +{kinematic_gain():.0f} % (the paper writes +35 %, from the
-rounded 0.42 / 0.31). Our robots, closed loop: fixed {clean_limits["fixed"]:.2f} m, MPC
-{clean_limits["mpc"]:.2f} m walked cleanly (+{ours:.0f} %; paper: 0.30 / 0.40 m).
+At {theta_p:.0f}° the paper's reading gives +{kinematic_gain():.0f} %
+(the paper writes +{k["increase_percent"]:.0f} %, from the rounded
+{k["step_max_rotation"]:.2f} / {k["step_max_fixed"]:.2f}). Our robots, closed loop: fixed
+{clean_limits["fixed"]:.2f} m, MPC {clean_limits["mpc"]:.2f} m walked cleanly (+{ours:.0f} %;
+paper: {lim["fixed"]:.2f} / {lim["mpc"]:.2f} m).
 </div>"""
 
 

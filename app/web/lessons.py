@@ -14,7 +14,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from app.live import FALL_HOLD_S
-from app.web.lesson_math import analysis_html, analysis_svg, equations
+from app.web import lesson_numbers
+from app.web.lesson_math import analysis_html, analysis_numbers, analysis_svg, equations
 from controller import strategy
 from controller.strategy import BUILTINS
 
@@ -29,14 +30,14 @@ __all__ = [
     "warnings_for",
 ]
 
-# Longest steps walked cleanly on this model, 0.01 m apart (the reference report's "Longest
-# step": `pelvic-walk simulate --method M --step-length L`, 10 steps of 1.2 s, the defaults):
-# fixed 0.37 (0.38: kappa of the legs 2.3e8, 25 IK ticks at the speed limit), redundancy 0.43
-# (0.44: landing error 3.1 cm), mpc 0.43 (0.44: kappa of the legs 4.5e5, 20 IK ticks at the
-# speed limit). Beyond them a method does not walk cleanly at the default timing. The single
-# source of "our limits" for the lessons, the analysis view and the warnings.
-CLEAN_LIMIT_M = {"fixed": 0.37, "redundancy": 0.43, "mpc": 0.43}
-PAPER_LIMIT_M = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
+# Longest steps walked cleanly on this model and the paper's (the reference report's "Longest
+# step", `pelvic-walk experiments`: 10 steps of 1.2 s, the defaults), read from the report
+# (app.web.lesson_numbers): the single source of "our limits" for the lessons, the analysis view
+# and the warnings. Beyond them a method does not walk cleanly at the default timing.
+CLEAN_LIMIT_M = lesson_numbers.clean_limits()
+PAPER_LIMIT_M = lesson_numbers.paper_limits()
+_P = lesson_numbers.paper()
+_EQ5 = _P["kinematics"]["step_max_rotation"]  # [m] eq. (5) as the paper evaluates it
 
 # The paper's scenarios, in one place: parameter groups to change (others keep their value)
 # and optionally the methods to compare. Measured with `pelvic-walk simulate --method M
@@ -47,19 +48,19 @@ PAPER_LIMIT_M = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
 #           limit; mpc clean (kappa 47, waist 25 deg).
 #   0.42 m: fixed falls in its second step (3.13 s, torso tilted over 30 deg); mpc clean.
 PRESETS: dict[str, dict[str, Any]] = {  # button label (short: it must read whole) -> preset
-    "0.30 m: every robot clean": {
-        "walk": {"step_length": 0.30, "step_time": 1.2},
+    f"{PAPER_LIMIT_M['fixed']:.2f} m: every robot clean": {
+        "walk": {"step_length": PAPER_LIMIT_M["fixed"], "step_time": 1.2},
         "methods": ["fixed", "redundancy", "mpc"],
         "hint": "The paper's limit for the fixed pelvis: every robot walks cleanly here.",
     },
-    "0.40 m: the fixed knee straightens": {
-        "walk": {"step_length": 0.40, "step_time": 1.2},
+    f"{PAPER_LIMIT_M['mpc']:.2f} m: the fixed knee straightens": {
+        "walk": {"step_length": PAPER_LIMIT_M["mpc"], "step_time": 1.2},
         "methods": ["fixed", "mpc"],
         "hint": "The paper's limit with pelvic rotation: our fixed pelvis's swing knee "
         "straightens, the MPC stays clean.",
     },
-    "0.42 m (eq. 5): the fixed pelvis falls": {
-        "walk": {"step_length": 0.42, "step_time": 1.2},
+    f"{_EQ5:.2f} m (eq. 5): the fixed pelvis falls": {
+        "walk": {"step_length": _EQ5, "step_time": 1.2},
         "methods": ["fixed", "mpc"],
         "hint": "Eq. 5's step with the pelvis at 45 deg: our fixed pelvis falls, the MPC walks.",
     },
@@ -111,21 +112,23 @@ class Lesson:
 
 _F, _M = CLEAN_LIMIT_M["fixed"], CLEAN_LIMIT_M["mpc"]
 _PF, _PM = PAPER_LIMIT_M["fixed"], PAPER_LIMIT_M["mpc"]
+_EQ4 = analysis_numbers(_P["robot"]["theta_pel_deg"])  # eq. (4), (5) with the paper's inputs
 
 LESSONS: tuple[Lesson, ...] = (
     Lesson(
         "1. Why the fixed pelvis cannot reach",
         "eq. 4-5, 45; Fig. 1-2, 13",
-        {"step_length": 0.40, "step_time": 1.2},
+        {"step_length": _PM, "step_time": 1.2},
         ("fixed", "mpc"),
         "follow",
-        "At 0.40 m, the paper's limit with rotation, watch the fixed robot's <b>swing leg turn "
-        "red</b> at each landing: its reach (hip-to-ankle / leg length) nears 1, the knee is "
-        "straight and <b>kappa(J)</b> of its legs explodes; its badge says <i>knee nearly "
+        f"At {_PM:.2f} m, the paper's limit with rotation, watch the fixed robot's <b>swing leg "
+        "turn red</b> at each landing: its reach (hip-to-ankle / leg length) nears 1, the knee "
+        "is straight and <b>kappa(J)</b> of its legs explodes; its badge says <i>knee nearly "
         "straight</i> or <i>IK at the speed limit</i>. The MPC robot turns its pelvis (about "
-        "25°): its kappa stays near 40 and its badge <i>clean</i>. Our limits: fixed "
-        f"{_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
-        "press the preset <i>0.42 m (eq. 5)</i> and the fixed robot falls.",
+        f"{lesson_numbers.mpc_waist_deg(_PM):.0f}°): its kappa at landing stays near "
+        f"{lesson_numbers.kappa_legs_at_landing('mpc', _PM):.0f} and its badge <i>clean</i>. "
+        f"Our limits: fixed {_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
+        f"press the preset <i>{_EQ5:.2f} m (eq. 5)</i> and the fixed robot falls.",
         ("4", "5", "45"),
         ("status", "shares", "reach", "kappa_legs", "waist", "falls"),
     ),
@@ -156,7 +159,8 @@ LESSONS: tuple[Lesson, ...] = (
         "vertical and the black yaw-momentum <b>arrow</b> over the head grows. Read the peak "
         "over the last two steps in the table, then tick <b>Arm swing</b> (Controls tab, "
         "folder <i>Arm swing</i>) and watch the peak fall as the arms cancel the legs' "
-        "momentum (eq. 43); the paper reports up to -60 % in its experiment.",
+        f"momentum (eq. 43); the paper reports up to -{_P['arm_reduction_percent']:.0f} % in its "
+        "experiment.",
         ("41", "43"),
         ("arms", "yaw", "waist", "falls"),
         {"arms": {"enabled": False}},
@@ -191,7 +195,9 @@ LESSONS: tuple[Lesson, ...] = (
         "follow",
         "Both robots turn the pelvis, differently. <b>Redundancy</b> (the waist is one more "
         "free IK joint) turns only once the foot swings, and its rate jumps at lift-off and "
-        "landing; the <b>MPC</b> plans a smooth wave (the paper: -22 to +22° at 0.4 m). Compare "
+        "landing; the <b>MPC</b> plans a smooth wave (the paper: "
+        f"-{_P['waist_peak_deg']:.0f} to +{_P['waist_peak_deg']:.0f}° at "
+        f"{_P['waist_peak_length']:g} m). Compare "
         "the waist range and the <b>peak change of the waist rate</b> (its sharpness); the peak "
         "rates themselves are alike on our robot. The Plots tab draws both (Fig. 8).",
         ("37", "39"),
@@ -200,15 +206,17 @@ LESSONS: tuple[Lesson, ...] = (
     Lesson(
         "6. Eq. 1-5 against what the robots reach",
         "eq. 1-5; Fig. 1-2",
-        {"step_length": 0.42, "step_time": 1.2},
+        {"step_length": _EQ5, "step_time": 1.2},
         ("fixed", "mpc"),
         "side",
-        "0.42 m is eq. 5 with the pelvis at 45° as the paper evaluates it (the Kinematic analysis "
-        "below). Our fixed pelvis walks further than the static eq. 4 (0.316 m): the stance hip "
+        f"{_EQ5:.2f} m is eq. 5 with the pelvis at {_EQ4['theta']:.0f}° as the paper evaluates "
+        "it (the Kinematic analysis below). Our fixed pelvis walks further than the static eq. 4 "
+        f"({_EQ4['eq4']:.3f} m): the stance hip "
         f"travels forward during the step, so our limits are fixed {_F:.2f} m, MPC {_M:.2f} m "
         f"(paper: {_PF:.2f} / {_PM:.2f} m). Here the fixed robot <b>falls</b> in its second "
         f"step: it lies where it fell, ringed in red, for {FALL_HOLD_S:g} s while the MPC walks "
-        "on with much less than 45°, then both restart together. Compare the measured hip "
+        f"on with much less than {_EQ4['theta']:.0f}°, then both restart together. Compare the "
+        "measured hip "
         "advance with eq. 2's l_pel sin(theta).",
         ("2", "4", "5"),
         ("step", "hip", "waist", "reach", "status", "falls"),
@@ -327,9 +335,11 @@ EXPLAIN: dict[str, str] = {
         "condition number of the leg Jacobian (eq. 45): it shoots up as a knee straightens."
     ),
     "Kinematic analysis (eq. 1-5)": (
-        "Static step limit of a stretched leg: sqrt(l_leg^2 - z0^2) (eq. 4, 0.316 m). Turning "
-        "the pelvis moves the swing hip ahead (eq. 2, 5): 0.391 m with eq. 5 as printed "
-        "(0.5 l_pel sin theta), 0.421 m (+33 %) as the paper evaluates it (its 0.42 m). "
+        "Static step limit of a stretched leg: sqrt(l_leg^2 - z0^2) (eq. 4, "
+        f"{_EQ4['eq4']:.3f} m). Turning the pelvis moves the swing hip ahead (eq. 2, 5): "
+        f"{_EQ4['eq5_printed']:.3f} m with eq. 5 as printed (0.5 l_pel sin theta), "
+        f"{_EQ4['eq5_paper']:.3f} m (+{_EQ4['gain_paper']:.0f} %) as the paper evaluates it (its "
+        f"{_EQ5:.2f} m). "
         "Turn the pelvis with the slider of the Kinematic analysis folder."
     ),
 }
