@@ -235,8 +235,8 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--quick", action="store_true", help="a small smoke set (about 2 min)")
     add_strategy_argument(
         p,
-        "FILE.py[:Class]: your own pelvis strategy, studied beside the paper's three "
-        "(its own column in the tables; repeatable)",
+        "FILE.py[:Class]: your own pelvis strategy, studied beside the MPC in section 10 "
+        "(its own row: longest step, waist, energy, kappa, push survival; repeatable)",
     )
     p.add_argument(
         "--jobs",
@@ -492,7 +492,13 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main
 
-            return experiments_main(args.out, quick=args.quick, jobs=args.jobs, ray=args.ray)
+            return experiments_main(
+                args.out,
+                quick=args.quick,
+                jobs=args.jobs,
+                ray=args.ray,
+                strategies=tuple(args.strategies),
+            )
         if args.command == "sweep":
             from app.sweep import sweep_main
 

@@ -18,6 +18,7 @@ A spec may ask for pushes of another size (``push_std``, e.g. the robustness sec
 from __future__ import annotations
 
 import dataclasses
+import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -34,6 +35,15 @@ DISTURBANCE_PERIOD = 0.1  # [s] a push is held this long, then drawn again
 OWN_FIELDS = ("walk.step_length", "walk.n_steps", "arms.enabled")
 
 Override = tuple[str, Any]  # ("group.name", value), e.g. ("pelvis.k_pel", 0.3)
+
+
+def _shown(source: str) -> str:
+    """A strategy's ``FILE.py:Class`` as a command shows it: relative to the working folder
+    when it lies inside it (a report's commands then hold in any clone)."""
+    file, cls = strategy.parse_source(source)
+    rel = os.path.relpath(file)
+    shown = file if rel.startswith("..") else rel
+    return f"{shown}:{cls}" if cls else shown
 
 
 def length(x: float) -> float:
@@ -150,7 +160,9 @@ class RunSpec:
         """The ``pelvic-walk simulate`` command line that reruns this spec."""
         parts = [
             "pelvic-walk simulate",
-            f"--strategy {self.strategy_file}" if self.strategy_file else f"--method {self.method}",
+            f"--strategy {_shown(self.strategy_file)}"
+            if self.strategy_file
+            else f"--method {self.method}",
             f"--step-length {self.step_length:g}",
             f"--steps {self.n_steps}",
         ]

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 
-from app.experiments import balance, claims, energy, kappa, limits, robustness, waist, yaw
+from app.experiments import ablation, balance, claims, energy, kappa, limits, robustness, waist, yaw
 from app.experiments.definitions import Study
 from app.experiments.results import Meta, RunRecord, StudyResults
 from app.experiments.robustness import PushCell
@@ -38,6 +38,7 @@ def analyse(
         balance=balance.balance(study, results),
         robustness=robustness.robustness(study, results, pushes, sens, cell_pushes),
         sensitivity=sens,
+        ablation=ablation.ablation(study, results, pushes),
         runs={
             s.key: RunRecord(
                 s, r.wall_s, r.error, r.summary.as_dict() if r.summary else None, s.command()

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 from app.experiments.definitions import Study
 from app.experiments.runs import Results, case_key, summary_of, zmp_of
+from controller.strategy import MPC
 
 BALANCE_LENGTHS = (0.15, 0.20, 0.25, 0.30, 0.35, 0.40)  # [m] Table 1's lengths
 EDGES = ("outer", "inner", "toe", "heel", "two feet")  # where a CoP on an edge sits
@@ -59,7 +60,7 @@ class BalanceSection:
 
 
 def zmp(study: Study, results: Results) -> ZmpSection:
-    spec = study.figure_run("mpc", study.zmp_length)
+    spec = study.figure_run(MPC, study.zmp_length)
     s, ex = summary_of(results, spec), zmp_of(results, spec)
     if not s or not ex:
         return ZmpSection(study.zmp_length, available=False)

@@ -35,6 +35,7 @@ from app.experiments.paper import MeanStd
 from app.experiments.results import ClaimResult, StudyResults
 from app.experiments.verdicts import Claim, Rule, above, at_least, at_most, below, is_
 from app.sim.metrics import KAPPA_SINGULAR
+from controller.strategy import FIXED, MPC, REDUNDANCY
 
 
 def evaluate(study: Study, r: StudyResults) -> list[ClaimResult]:
@@ -45,7 +46,7 @@ def evaluate(study: Study, r: StudyResults) -> list[ClaimResult]:
 
 # -- the paper's side, from paper.py ----------------------------------------------------------
 _K, _T = paper.KINEMATICS, paper.TABLE1
-_FIXED, _ROT = paper.MAX_STEP["fixed"], paper.MAX_STEP["mpc"]
+_FIXED, _ROT = paper.MAX_STEP[FIXED], paper.MAX_STEP[MPC]
 _CHEAP, _DEAR = (
     (0.0, paper.ENERGY_ROTATION_CHEAPER_UP_TO),
     (paper.ENERGY_ROTATION_CHEAPER_UP_TO, _FIXED),
@@ -70,13 +71,11 @@ def _t1_vs_fixed(lo: float, hi: float) -> str:
     )
 
 
-_T1_BOTH = [x for x in paper.TABLE1_LENGTHS if _T["mpc"][x] and _T["redundancy"][x]]
+_T1_BOTH = [x for x in paper.TABLE1_LENGTHS if _T[MPC][x] and _T[REDUNDANCY][x]]
 _T1_STD_WINS = sum(
-    cast(MeanStd, _T["mpc"][x]).std < cast(MeanStd, _T["redundancy"][x]).std for x in _T1_BOTH
+    cast(MeanStd, _T[MPC][x]).std < cast(MeanStd, _T[REDUNDANCY][x]).std for x in _T1_BOTH
 )
-_T1_GAPS = [
-    cast(MeanStd, _T["redundancy"][x]).std - cast(MeanStd, _T["mpc"][x]).std for x in _T1_BOTH
-]
+_T1_GAPS = [cast(MeanStd, _T[REDUNDANCY][x]).std - cast(MeanStd, _T[MPC][x]).std for x in _T1_BOTH]
 _BELOW = measures.mpc_below_redundancy_lengths()
 _EXCEPT = paper.table1_lengths_mpc_not_below_redundancy()
 _SHARE = "share of the comparisons in the paper's order, the repeats separating the two"

@@ -22,7 +22,9 @@ Table 1 use come from there.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 from app.experiments import paper
@@ -36,6 +38,7 @@ from app.run_spec import (
 )
 from controller import strategy
 from controller.params import LATERAL_MODES, ControllerParams
+from controller.strategy import FIXED, MPC, REDUNDANCY
 
 __all__ = [  # the run's own names, for the modules and tests that read them here
     "DISTURBANCE",
@@ -45,7 +48,7 @@ __all__ = [  # the run's own names, for the modules and tests that read them her
     "length",
 ]
 
-ROTATING = ("redundancy", "mpc")
+ROTATING = (REDUNDANCY, MPC)
 EXTRACTS = ("step", "walk", "zmp")
 LATERAL = "pelvis.lateral_distance"
 REFERENCE = "pelvis.reference"  # what the reference angle is computed from (an ablation)
@@ -62,6 +65,7 @@ AUTHORS = (
     ("walk.step_width", AUTHORS_WIDTH),
 )
 AUTHORS_REST = 0.06  # [s] their rest within the step
+EXAMPLES = Path(__file__).resolve().parents[2] / "examples"  # the checkout's example strategies
 
 
 @dataclass(frozen=True)
@@ -70,7 +74,7 @@ class SensitivityCell:
 
     name: str  # in words
     overrides: tuple[Override, ...]
-    methods: tuple[str, ...] = ("fixed", "mpc")
+    methods: tuple[str, ...] = (FIXED, MPC)
 
 
 @dataclass(frozen=True)
@@ -82,9 +86,9 @@ class Sensitivity:
     rows: tuple[str, tuple[Any, ...]]  # parameter, values
     columns: tuple[str, tuple[Any, ...]]
     cells: tuple[SensitivityCell, ...] = ()
-    methods: tuple[str, ...] = ("fixed", "mpc")
+    methods: tuple[str, ...] = (FIXED, MPC)
     steps: int = 6  # steps of each walk of the limit search
-    search: tuple[float, float, float] = (0.20, 0.60, 0.01)  # lo, hi, resolution [m]
+    search: tuple[float, float, float] = (0.25, 0.55, 0.01)  # lo, hi, resolution [m]
     first: float = 0.40  # [m] tried first: the length the heatmap reads the waist at
     landings: tuple[float, ...] = (0.01, 0.02, 0.03, 0.04)  # [m] landing-error thresholds
     kappas: tuple[float, ...] = (300.0, 1000.0, 3000.0)  # kappa(legs) bounds
@@ -111,8 +115,26 @@ class Falls:
 
     force: float = 15.0  # [N] std of each axis (three times DISTURBANCE)
     step_length: float = 0.30  # [m]
-    walks: int = 40  # seeds 0 .. walks - 1
-    steps: int = 20
+    walks: int = 20  # seeds 0 .. walks - 1
+    steps: int = 10  # the figure runs' walk (Table 1's 20 would double the study's cost)
+
+
+@dataclass(frozen=True)
+class Ablations:
+    """Section 10: strategies beside the paper's MPC on the same measures (longest clean step,
+    waist, energy, kappa, push survival at ``push_length``). ``files`` are pelvis strategies
+    (``FILE.py[:Class]``, relative to the checkout's ``examples/`` folder unless absolute); a
+    user's ``--strategy`` files join them (:attr:`Study.strategies`)."""
+
+    files: tuple[str, ...] = ("track_reference.py", "feedforward_sine.py")
+    push_length: float = 0.30  # [m]
+
+
+def _example(source: str) -> str:
+    file, cls = strategy.parse_source(source)
+    if not os.path.isabs(file):
+        file = str(EXAMPLES / file)
+    return f"{file}:{cls}" if cls else file
 
 
 @dataclass(frozen=True)
@@ -135,6 +157,21 @@ class Study:
     sensitivity: Sensitivity | None = None  # section 8 (None: not run)
     pushes: Pushes | None = None  # the robustness section's push survival (None: not run)
     falls: Falls | None = None  # the robustness section's walks under larger pushes
+    ablations: Ablations | None = None  # section 10 (None: not run)
+    strategies: tuple[str, ...] = ()  # the user's --strategy files: rows of section 10
+
+    def ablation_methods(self) -> tuple[str, ...]:
+        """The strategies of section 10 beside the paper's (loaded here, in order; a missing
+        example file is skipped: an installed package has no ``examples/``)."""
+        if self.ablations is None and not self.strategies:
+            return ()
+        found = []
+        for source in self.ablations.files if self.ablations else ():
+            path = _example(source)
+            if os.path.isfile(strategy.parse_source(path)[0]):
+                found.append(path)
+        names = strategy.load_files([*found, *self.strategies])
+        return tuple(m for m in names if m not in self.methods)
 
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
         """The unseeded run every figure section shares at one (method, length)."""
@@ -161,13 +198,13 @@ class Study:
         """MPC at one figure length with the reference angle computed from the state now,
         held over the horizon (no prediction; ``pelvis.reference``)."""
         extra = ((REFERENCE, "now"),)
-        return RunSpec("mpc", length(step_length), self.n_steps, True, None, self.overrides + extra)
+        return RunSpec(MPC, length(step_length), self.n_steps, True, None, self.overrides + extra)
 
     def lateral_run(self, mode: str, step_length: float) -> RunSpec:
         """MPC at one figure length with one reading of the lateral distance (the default
         mode's run is the figure run)."""
         extra = () if mode == _DEFAULT_MODE else ((LATERAL, mode),)
-        return RunSpec("mpc", length(step_length), self.n_steps, True, None, self.overrides + extra)
+        return RunSpec(MPC, length(step_length), self.n_steps, True, None, self.overrides + extra)
 
     def is_figure_run(self, spec: RunSpec) -> bool:
         """Whether ``spec`` is the figure run of its (method, length), arms on."""
@@ -175,7 +212,7 @@ class Study:
 
 
 _LATERAL_CELLS = tuple(
-    SensitivityCell(f"lateral distance: {m}", ((LATERAL, m),), ("mpc",))
+    SensitivityCell(f"lateral distance: {m}", ((LATERAL, m),), (MPC,))
     for m in LATERAL_MODES
     if m != _DEFAULT_MODE
 )
@@ -190,16 +227,15 @@ FULL = Study(
     energy_steps=paper.TABLE1_STEPS,
     sensitivity=Sensitivity(
         rows=("pelvis.k_pel", (0.15, 0.25, 0.35, 0.45)),
-        columns=("walk.dsp_ratio", (0.1, 0.2, 0.3, 0.4)),
+        columns=("walk.dsp_ratio", (0.1, 0.2, 0.3)),
         cells=(
             SensitivityCell("the authors' DSP and step width", AUTHORS),
-            SensitivityCell("step time 0.8 s", (("walk.step_time", 0.8),)),
-            SensitivityCell("step time 1.4 s", (("walk.step_time", 1.4),)),
             *_LATERAL_CELLS,
         ),
     ),
     pushes=Pushes(),
     falls=Falls(),
+    ablations=Ablations(),
 )
 QUICK = Study(
     name="quick",
@@ -221,6 +257,7 @@ QUICK = Study(
     ),
     pushes=Pushes(lengths=(0.30,), resolution=64.0),
     falls=Falls(walks=3, steps=6),
+    ablations=Ablations(),
 )
 
 STUDIES: dict[str, Study] = {"full": FULL, "quick": QUICK}
@@ -246,7 +283,7 @@ def planned_runs(study: Study) -> Requests:
     for x in study.kappa_lengths:  # section 6: kappa over one step
         for m in study.methods:
             _add(req, study.figure_run(m, x), "step")
-    _add(req, study.figure_run("mpc", study.zmp_length), "zmp")  # section 7
+    _add(req, study.figure_run(MPC, study.zmp_length), "zmp")  # section 7
     for x in study.figure_lengths:  # section 3: the lateral distance's readings, the ablation
         for mode in LATERAL_MODES:
             _add(req, study.lateral_run(mode, x), "step")
@@ -258,6 +295,9 @@ def planned_runs(study: Study) -> Requests:
         for m in study.methods:
             for spec in study.energy_runs(m, x):
                 _add(req, spec)
+    for m in study.ablation_methods():  # section 10: the sweep and the figure lengths
+        for x in sorted({*study.sweep_grid, *study.figure_lengths}):
+            _add(req, study.figure_run(m, x), "step")
     return req
 
 
@@ -293,7 +333,7 @@ def refinement_runs(study: Study, clean_by_method: dict[str, dict[float, bool]])
     for m, clean in clean_by_method.items():
         for x in refinement_lengths(study, clean):
             _add(req, study.figure_run(m, x), "step")
-    for x in refinement_lengths(study, clean_by_method.get("fixed", {})):
+    for x in refinement_lengths(study, clean_by_method.get(FIXED, {})):
         for m in study.methods:
             _add(req, study.figure_run(m, x), "step")
     return req

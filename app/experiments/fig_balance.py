@@ -13,11 +13,12 @@ from app.experiments.fig_style import finish, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, zmp_of
 from app.methods import method_hex
+from controller.strategy import MPC
 from models.dyros_jet import FOOT_SIZE
 
 
 def fig_zmp(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:
-    ex = zmp_of(results, study.figure_run("mpc", study.zmp_length))
+    ex = zmp_of(results, study.figure_run(MPC, study.zmp_length))
     if not ex:
         return None
     feet = np.array(ex.footholds)
@@ -54,7 +55,7 @@ def fig_zmp(study: Study, results: Results, r: StudyResults, path: Path) -> str 
             ls="none",
             marker=".",
             ms=2.5,
-            color=method_hex("mpc"),
+            color=method_hex(MPC),
             label="measured ZMP (centre of pressure), 100 Hz",
         )
         if ex.balance_margin:

@@ -12,11 +12,12 @@ from app.experiments.runs import Results, array, step_of
 from app.methods import method_hex
 from app.sim.metrics import KAPPA_SINGULAR
 from controller.kinematics import KAPPA_CAP
+from controller.strategy import FIXED
 
 
 def _limit_tag(r: StudyResults, x: float) -> str:
     """Where ``x`` stands against the fixed pelvis's own limit."""
-    lc, ff = r.max_step["fixed"].longest_clean, r.max_step["fixed"].first_failed
+    lc, ff = r.max_step[FIXED].longest_clean, r.max_step[FIXED].first_failed
     if lc is not None and abs(x - lc) < 1e-9:
         return " (fixed: longest clean)"
     if ff is not None and abs(x - ff) < 1e-9:

@@ -15,8 +15,9 @@ from app.experiments.fig_style import finish, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results
 from app.experiments.sensitivity import SensitivitySection
+from controller.strategy import FIXED, MPC
 
-PAPER_GAIN = paper.MAX_STEP["mpc"] - paper.MAX_STEP["fixed"]  # [m]
+PAPER_GAIN = paper.MAX_STEP[MPC] - paper.MAX_STEP[FIXED]  # [m]
 
 
 def _grid(s: SensitivitySection, value: Any) -> np.ndarray:
@@ -56,9 +57,9 @@ def fig_sensitivity(study: Study, results: Results, r: StudyResults, path: Path)
     if s is None or not s.rows:
         return None
     gain = _grid(s, s.gain)
-    mpc = _grid(s, lambda ov: s.limit("mpc", ov))
-    fixed = _grid(s, lambda ov: s.limit("fixed", ov))
-    waist = _grid(s, lambda ov: (row := s.row("mpc", ov)) and row.waist_at_first_deg)
+    mpc = _grid(s, lambda ov: s.limit(MPC, ov))
+    fixed = _grid(s, lambda ov: s.limit(FIXED, ov))
+    waist = _grid(s, lambda ov: (row := s.row(MPC, ov)) and row.waist_at_first_deg)
     fig, (ax_g, ax_w) = plt.subplots(1, 2, figsize=(12.5, 4.6))
     span = max(PAPER_GAIN * 1.5, float(np.nanmax(np.abs(gain))) if np.isfinite(gain).any() else 0)
     text = [

@@ -10,6 +10,7 @@ from app.experiments.fig_style import DEG, finish, label, plt, shade_dsp
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, step_of
 from app.methods import method_hex
+from controller.strategy import MPC
 
 
 def fig_waist(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:
@@ -29,7 +30,7 @@ def fig_waist(study: Study, results: Results, r: StudyResults, path: Path) -> st
             style = dict(color=method_hex(m), lw=2, label=label(m))
             ax_a.plot(t, array(ex.waist_angle_cmd) * DEG, **style)
             ax_r.plot(t, array(ex.waist_rate) * DEG, **style)
-            if m == "mpc":
+            if m == MPC:
                 t_ref = t + ex.theta_ref_lead
                 keep = t_ref <= ex.duration + 1e-9
                 ax_a.plot(

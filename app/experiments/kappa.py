@@ -31,6 +31,7 @@ from app.experiments.runs import (
     step_of,
     summary_of,
 )
+from controller.strategy import FIXED
 
 
 @dataclass(frozen=True)
@@ -131,7 +132,7 @@ def near_limit_lengths(study: Study, results: Results, fixed: MaxStep) -> list[f
     if fixed.longest_clean is None:
         return []
     lc, ff = fixed.longest_clean, fixed.first_failed
-    cands = figure_lengths_run(study, results, "fixed")
+    cands = figure_lengths_run(study, results, FIXED)
     below = [x for x in cands if x < lc - 1e-9 and x >= lc - NEAR_BELOW - 1e-9]
     near = ([below[0]] if below else []) + [lc]
     if ff is not None:
@@ -162,7 +163,7 @@ def kappa(study: Study, results: Results, ms: dict[str, MaxStep]) -> KappaSectio
             case_key(m, x): kappa_case(study, results, m, x) for x in lengths for m in study.methods
         }
 
-    near = near_limit_lengths(study, results, ms["fixed"])
+    near = near_limit_lengths(study, results, ms[FIXED])
     section = KappaSection(
         paper_lengths=list(study.kappa_lengths),
         near_limit_lengths=near,
@@ -173,7 +174,7 @@ def kappa(study: Study, results: Results, ms: dict[str, MaxStep]) -> KappaSectio
     )
     ratios: dict[str, dict[str, dict[str, float]]] = {"J_low": {}, "legs": {}}
     for x in sorted(set(study.kappa_lengths) | set(near)):
-        f = section.case("fixed", x)
+        f = section.case(FIXED, x)
         for name, attr in (
             ("J_low", "kappa_landing_median"),
             ("legs", "kappa_legs_landing_median"),

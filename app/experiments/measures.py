@@ -25,6 +25,7 @@ from app.experiments.results import StudyResults
 from app.experiments.runs import case_key, length_key
 from app.experiments.waist import sine_share
 from app.sim.metrics import KAPPA_SINGULAR
+from controller.strategy import FIXED, MPC, REDUNDANCY
 
 Measured = dict[str, Any] | None  # None: the runs a claim needs are missing
 Measure = Callable[[Study, StudyResults], Measured]
@@ -51,7 +52,7 @@ def kinematics(study: Study, r: StudyResults) -> Measured:
         **{
             f"{who}_{key}": d[f"step_max_{key}_static"]
             for who, d in (("p", p), ("o", o))
-            for key in ("fixed", "rotation")
+            for key in ("fixed", "rotation")  # eq. (4) and (5), not methods
         },
         p_inc=p["increase_percent"],
         o_inc=o["increase_percent"],
@@ -59,13 +60,13 @@ def kinematics(study: Study, r: StudyResults) -> Measured:
 
 
 def max_step(study: Study, r: StudyResults) -> Measured:
-    f, red, m = (r.max_step[k].longest_clean for k in ("fixed", "redundancy", "mpc"))
+    f, red, m = (r.max_step[k].longest_clean for k in (FIXED, REDUNDANCY, MPC))
     if f is None or m is None:
         return None
     red_text = "None" if red is None else format(red, ".2f")
     walks = " / ".join(
         "-" if (w := r.max_step[k].walks_limit) is None else f"{w:.2f}"
-        for k in ("fixed", "redundancy", "mpc")
+        for k in (FIXED, REDUNDANCY, MPC)
     )
     return dict(
         fixed=f, redundancy=red_text, mpc=m, increase=100.0 * (m / f - 1.0), walks=walks + " m"
@@ -74,11 +75,11 @@ def max_step(study: Study, r: StudyResults) -> Measured:
 
 def _waist_pair(r: StudyResults) -> tuple[Any, Any]:
     cases = r.waist.cases
-    return cases.get(case_key("mpc", LONG)), cases.get(case_key("redundancy", LONG))
+    return cases.get(case_key(MPC, LONG)), cases.get(case_key(REDUNDANCY, LONG))
 
 
 def waist_amplitude(study: Study, r: StudyResults) -> Measured:
-    c = r.waist.cases.get(case_key("mpc", paper.WAIST_PEAK_LENGTH))
+    c = r.waist.cases.get(case_key(MPC, paper.WAIST_PEAK_LENGTH))
     if not c:
         return None
     return dict(
@@ -171,8 +172,8 @@ def arm_swing(study: Study, r: StudyResults) -> Measured:
 
 
 def yaw_redundancy_higher(study: Study, r: StudyResults) -> Measured:
-    red = r.yaw_momentum.cases.get(case_key("redundancy", LONG))
-    mpc = r.yaw_momentum.cases.get(case_key("mpc", LONG))
+    red = r.yaw_momentum.cases.get(case_key(REDUNDANCY, LONG))
+    mpc = r.yaw_momentum.cases.get(case_key(MPC, LONG))
     if not (red and mpc and red.no_arms.peak and mpc.no_arms.peak):
         return None
     return dict(
@@ -222,7 +223,7 @@ def _pair_cells(e: EnergySection, a: str, b: str, lengths: list[float]) -> list[
 
 def energy_std(study: Study, r: StudyResults) -> Measured:
     """MPC's std against redundancy's at every length both walked."""
-    pairs = _pair_cells(r.energy, "mpc", "redundancy", r.energy.lengths)
+    pairs = _pair_cells(r.energy, MPC, REDUNDANCY, r.energy.lengths)
     if not pairs:
         return None
     details = ", ".join(f"{x:.2f}: {_std_vs(a, b)}" for x, a, b in pairs)
@@ -234,7 +235,7 @@ def energy_std_gap(study: Study, r: StudyResults) -> Measured:
     p-value, and whether the MPC's std is significantly the smaller at the longest length."""
     from scipy import stats
 
-    pairs = _pair_cells(r.energy, "mpc", "redundancy", r.energy.lengths)
+    pairs = _pair_cells(r.energy, MPC, REDUNDANCY, r.energy.lengths)
     if len(pairs) < 3:
         return None
     gaps = [cast(float, b.std) - cast(float, a.std) for _, a, b in pairs]
@@ -257,15 +258,13 @@ def mpc_below_redundancy_lengths() -> list[float]:
     """The lengths of the paper's "the method using redundancy consumed more energy than the
     method using MPC, except for the case of a 0.3 m step length": Table 1's lengths where
     both have a value, but the exception."""
-    both = [
-        x for x in paper.TABLE1_LENGTHS if paper.TABLE1["mpc"][x] and paper.TABLE1["redundancy"][x]
-    ]
+    both = [x for x in paper.TABLE1_LENGTHS if paper.TABLE1[MPC][x] and paper.TABLE1[REDUNDANCY][x]]
     return [x for x in both if x not in paper.table1_lengths_mpc_not_below_redundancy()]
 
 
 def energy_mpc_below_redundancy(study: Study, r: StudyResults) -> Measured:
     lengths = [x for x in mpc_below_redundancy_lengths() if x in r.energy.lengths]
-    pairs = _pair_cells(r.energy, "mpc", "redundancy", lengths)
+    pairs = _pair_cells(r.energy, MPC, REDUNDANCY, lengths)
     if not pairs:
         return None
     details = ", ".join(f"{x:.2f}: {_mean_vs(a, b)}" for x, a, b in pairs)
@@ -279,7 +278,7 @@ def energy_vs_fixed(lo: float, hi: float, cheaper: bool) -> Measure:
     def measure(study: Study, r: StudyResults) -> Measured:
         checks = []
         for x in (x for x in r.energy.lengths if lo + 1e-9 < x <= hi + 1e-9):
-            f = r.energy.cell("fixed", x)
+            f = r.energy.cell(FIXED, x)
             for m in ROTATING:
                 c = r.energy.cell(m, x)
                 if f and c:
@@ -302,7 +301,7 @@ def paper_least_lengths() -> tuple[list[float], list[float]]:
     for x in paper.TABLE1_LENGTHS:
         cells = {m: c for m in paper.TABLE1 if (c := paper.TABLE1[m][x])}
         if len(cells) >= 2:
-            mine = min(cells, key=lambda m: cells[m].mean) == "mpc"
+            mine = min(cells, key=lambda m: cells[m].mean) == MPC
             (least if mine else not_least).append(x)
     return least, not_least
 
@@ -316,9 +315,9 @@ def energy_least(study: Study, r: StudyResults) -> Measured:
     status: dict[float, str] = {}
     for x in r.energy.lengths:
         cells = {m: c for m in study.methods if (c := r.energy.cell(m, x))}
-        if "mpc" not in cells or len(cells) < 2:
+        if MPC not in cells or len(cells) < 2:
             continue
-        orders = {m: order_means(cells["mpc"], cells[m]) for m in cells if m != "mpc"}
+        orders = {m: order_means(cells[MPC], cells[m]) for m in cells if m != MPC}
         if all(o == -1 for o in orders.values()):
             status[x] = "least"
         elif any(o == 1 for o in orders.values()):
@@ -347,15 +346,15 @@ def _kappa_ratio_at(r: StudyResults, x: float | None) -> Measured:
         return None
     row = r.kappa.landing_ratio_fixed_over.get(length_key(x), {})
     legs = r.kappa.landing_ratio_fixed_over_legs.get(length_key(x), {})
-    if not row.get("mpc"):
+    if not row.get(MPC):
         return None
     nan = float("nan")
     return dict(
         length=x,
-        ratio=row["mpc"],
-        ratio_redundancy=row.get("redundancy", nan),
-        ratio_legs=legs.get("mpc", nan),
-        ratio_legs_redundancy=legs.get("redundancy", nan),
+        ratio=row[MPC],
+        ratio_redundancy=row.get(REDUNDANCY, nan),
+        ratio_legs=legs.get(MPC, nan),
+        ratio_legs_redundancy=legs.get(REDUNDANCY, nan),
     )
 
 
@@ -366,12 +365,12 @@ def kappa_ratio_paper_length(study: Study, r: StudyResults) -> Measured:
 
 def kappa_ratio_own_limit(study: Study, r: StudyResults) -> Measured:
     """Fixed / rotating kappa(J_low) at landing at our fixed pelvis's longest clean step."""
-    return _kappa_ratio_at(r, r.max_step["fixed"].longest_clean)
+    return _kappa_ratio_at(r, r.max_step[FIXED].longest_clean)
 
 
 def own_limit_differs(study: Study, r: StudyResults) -> bool:
-    lc = r.max_step["fixed"].longest_clean
-    return lc is not None and abs(lc - paper.MAX_STEP["fixed"]) > 1e-9
+    lc = r.max_step[FIXED].longest_clean
+    return lc is not None and abs(lc - paper.MAX_STEP[FIXED]) > 1e-9
 
 
 def _status(c: Any) -> str:
@@ -380,8 +379,8 @@ def _status(c: Any) -> str:
 
 def kappa_diverges(study: Study, r: StudyResults) -> Measured:
     """kappa(legs) over the run at the paper's length, fixed pelvis against the MPC."""
-    f = r.kappa.cases.get(case_key("fixed", paper.KAPPA_DIVERGES_LENGTH))
-    m = r.kappa.cases.get(case_key("mpc", paper.KAPPA_DIVERGES_LENGTH))
+    f = r.kappa.cases.get(case_key(FIXED, paper.KAPPA_DIVERGES_LENGTH))
+    m = r.kappa.cases.get(case_key(MPC, paper.KAPPA_DIVERGES_LENGTH))
     if not (f and m and f.kappa_legs_run_max and m.kappa_legs_run_max):
         return None
     return dict(
@@ -399,10 +398,10 @@ def kappa_diverges(study: Study, r: StudyResults) -> Measured:
 def kappa_own_limit(study: Study, r: StudyResults) -> Measured:
     """kappa(legs) of the fixed pelvis at its longest clean and first failed length, and the
     MPC's at that failed length."""
-    lc, ff = r.max_step["fixed"].longest_clean, r.max_step["fixed"].first_failed
+    lc, ff = r.max_step[FIXED].longest_clean, r.max_step[FIXED].first_failed
     if lc is None or ff is None:
         return None
-    a, b, c = (r.kappa.case(m, x) for m, x in (("fixed", lc), ("fixed", ff), ("mpc", ff)))
+    a, b, c = (r.kappa.case(m, x) for m, x in ((FIXED, lc), (FIXED, ff), (MPC, ff)))
     if not (a and b and c and a.kappa_legs_run_max and b.kappa_legs_run_max):
         return None
     if not c.kappa_legs_run_max:
@@ -424,7 +423,7 @@ def kappa_own_limit(study: Study, r: StudyResults) -> Measured:
 def kappa_events(study: Study, r: StudyResults) -> Measured:
     """At the long length: MPC's kappa(J_low) at lift-off above redundancy's, redundancy's at
     landing above MPC's (median over the steps; kappa(legs) beside)."""
-    mpc, red = r.kappa.case("mpc", LONG), r.kappa.case("redundancy", LONG)
+    mpc, red = r.kappa.case(MPC, LONG), r.kappa.case(REDUNDANCY, LONG)
     if not (mpc and red and mpc.kappa_liftoff_median and red.kappa_liftoff_median):
         return None
     if not (mpc.kappa_landing_median and red.kappa_landing_median):
@@ -477,11 +476,11 @@ def stability(study: Study, r: StudyResults) -> Measured:
     rob = r.robustness
     if rob is None:
         return None
-    comps = compare(rob, "mpc", "redundancy")
+    comps = compare(rob, MPC, REDUNDANCY)
     if not comps:
         return None
     t = _tally(comps)
-    fixed = _tally(compare(rob, "mpc", "fixed"))
+    fixed = _tally(compare(rob, MPC, FIXED))
     return dict(
         **t,
         share=t["wins"] / t["n"],

@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import asdict, dataclass
 from typing import Any, NamedTuple
 
+from controller.strategy import FIXED, MPC, REDUNDANCY
+
 CITATION = (
     'B. Park and J. Park, "Optimization of Pelvic Rotation Walking Pattern Considering Future '
     'States Using Model Predictive Control to Increase the Step Length", IEEE Access, 2022, '
@@ -49,7 +51,7 @@ ROBOT = KinematicInputs(l_leg=0.75, z0=0.68, l_pel=0.21, w_step=0.243, theta_pel
 KINEMATICS = KinematicLimits(step_max_fixed=0.31, step_max_rotation=0.42, increase_percent=35.0)
 
 # Sec. VI-B: longest step walked in simulation [m].
-MAX_STEP: dict[str, float] = {"fixed": 0.30, "redundancy": 0.40, "mpc": 0.40}
+MAX_STEP: dict[str, float] = {FIXED: 0.30, REDUNDANCY: 0.40, MPC: 0.40}
 
 # Fig. 8-9 (waist angle and rate) and Fig. 12 (yaw momentum) show 0.3 and 0.4 m steps.
 FIGURE_LENGTHS: tuple[float, ...] = (0.30, 0.40)
@@ -78,7 +80,7 @@ TABLE1_STEPS = 20
 TABLE1_WINDOWS = TABLE1_RUNS * TABLE1_STEPS // 2  # two steps per window
 TABLE1_LENGTHS: tuple[float, ...] = (0.15, 0.20, 0.25, 0.30, 0.35, 0.40)
 TABLE1: dict[str, dict[float, MeanStd | None]] = {
-    "fixed": {
+    FIXED: {
         0.15: MeanStd(14.78, 2.89),
         0.20: MeanStd(19.11, 5.55),
         0.25: MeanStd(19.76, 10.23),
@@ -86,7 +88,7 @@ TABLE1: dict[str, dict[float, MeanStd | None]] = {
         0.35: None,
         0.40: None,
     },
-    "redundancy": {
+    REDUNDANCY: {
         0.15: MeanStd(12.79, 3.04),
         0.20: MeanStd(18.17, 6.12),
         0.25: MeanStd(27.14, 9.16),
@@ -94,7 +96,7 @@ TABLE1: dict[str, dict[float, MeanStd | None]] = {
         0.35: MeanStd(411.25, 208.41),
         0.40: MeanStd(941.32, 597.6),
     },
-    "mpc": {
+    MPC: {
         0.15: MeanStd(10.06, 0.87),
         0.20: MeanStd(16.92, 3.31),
         0.25: MeanStd(26.53, 2.57),
@@ -112,7 +114,7 @@ ENERGY_MPC_BELOW_REDUNDANCY: tuple[float, ...] = (0.35, 0.40)
 
 def max_step_increase_percent() -> float:
     """The paper's gain of the longest step with rotation (MPC) over the fixed pelvis [%]."""
-    return 100.0 * (MAX_STEP["mpc"] / MAX_STEP["fixed"] - 1.0)
+    return 100.0 * (MAX_STEP[MPC] / MAX_STEP[FIXED] - 1.0)
 
 
 def table1_lengths(method: str, walked: bool = True) -> list[float]:
@@ -125,7 +127,7 @@ def table1_lengths_mpc_not_below_redundancy() -> list[float]:
     return [
         x
         for x in TABLE1_LENGTHS
-        if (a := TABLE1["mpc"][x]) and (b := TABLE1["redundancy"][x]) and a.mean >= b.mean
+        if (a := TABLE1[MPC][x]) and (b := TABLE1[REDUNDANCY][x]) and a.mean >= b.mean
     ]
 
 

@@ -16,6 +16,8 @@ import jinja2
 import numpy as np
 
 from app.experiments import paper
+from app.experiments.ablation import AblationRow
+from app.experiments.ablation import reading as ablation_reading
 from app.experiments.definitions import (
     AUTHORS,
     AUTHORS_DSP,
@@ -32,7 +34,7 @@ from app.experiments.runs import case_key, length_key
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.summary import plain, summary_lines, trade_words
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
-from app.experiments.waist import ANTICIPATION_MIN, EARLY_TURN_MIN
+from app.experiments.waist import ANTICIPATION_MIN, EARLY_TURN_MIN, sine_share
 from app.experiments.worker import LANDING_WINDOW
 from app.methods import METHOD_INFO
 from app.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
@@ -206,6 +208,12 @@ def authors_words() -> str:
     )
 
 
+def energy_word(k: str, w: AblationRow) -> str:
+    """A section 10 row's energy at one length: 200 Hz (1 ms substeps)."""
+    e, es = w.energy.get(k), w.energy_substep.get(k)
+    return DASH if e is None else f"{e:.1f}" + (f" ({es:.1f})" if es is not None else "")
+
+
 def _environment() -> jinja2.Environment:
     env = jinja2.Environment(
         loader=jinja2.PackageLoader("app.experiments", "templates"),
@@ -217,7 +225,15 @@ def _environment() -> jinja2.Environment:
         extensions=["jinja2.ext.do"],
     )
     env.filters.update(
-        f=fmt, percent=percent, kappa=kappa, lengths=lengths, mark=VERDICT_MARK.get, stdev=stdev
+        f=fmt,
+        percent=percent,
+        kappa=kappa,
+        lengths=lengths,
+        mark=VERDICT_MARK.get,
+        stdev=stdev,
+        length_key=length_key,
+        clean_word=lambda k, w: "yes" if w.clean.get(k) else "no",
+        energy_word=energy_word,
     )
     env.globals.update(
         row=row,
@@ -264,6 +280,8 @@ def _environment() -> jinja2.Environment:
         step_time=_P.walk.step_time,
         dsp_ratio=_P.walk.dsp_ratio,
         k_pel=_P.pelvis.k_pel,
+        sine=sine_share(_P.walk.dsp_ratio),
+        ablation_reading=ablation_reading,
     )
     return env
 

@@ -16,6 +16,7 @@ from typing import Any
 
 import numpy as np
 
+from app.experiments.ablation import AblationSection
 from app.experiments.balance import BalanceSection, ZmpSection
 from app.experiments.energy import EnergySection
 from app.experiments.kappa import KappaSection
@@ -100,6 +101,7 @@ class StudyResults:
     balance: BalanceSection | None = None
     robustness: RobustnessSection | None = None
     sensitivity: SensitivitySection | None = None
+    ablation: AblationSection | None = None  # section 10: strategies beside the MPC
     claims: list[ClaimResult] = field(default_factory=list)
     runs: dict[str, RunRecord] = field(default_factory=dict)
     figures: dict[str, str] = field(default_factory=dict)  # name -> file in figures/

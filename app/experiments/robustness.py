@@ -40,6 +40,7 @@ from app.experiments.runs import Results, case_key, summary_of
 from app.experiments.sensitivity import SensitivitySection, reads
 from app.run_spec import DISTURBANCE, Override
 from app.sim.metrics import LANDING_ERROR_CLEAN
+from controller.strategy import FIXED, MPC
 
 
 @dataclass(frozen=True)
@@ -107,7 +108,7 @@ class TradeRow:
 
     def margin(self, direction: str) -> float | None:
         """[N] the MPC's largest push survived minus the fixed pelvis's (None: missing)."""
-        m, f = (self.pushes.get(direction, {}).get(k) for k in ("mpc", "fixed"))
+        m, f = (self.pushes.get(direction, {}).get(k) for k in (MPC, FIXED))
         if m is None or f is None or m.survived is None or f.survived is None:
             return None
         return m.survived - f.survived
@@ -304,11 +305,17 @@ def push_job(
     resolution: float,
     f_high: float,
     overrides: tuple[Override, ...] = (),
+    strategy_file: str | None = None,
 ) -> dict[str, Any]:
     """One method's push survival at one length and direction (a job of the run engine: plain
-    data in and out), with ``overrides`` of any other parameter."""
+    data in and out), with ``overrides`` of any other parameter; ``strategy_file`` is a
+    user's strategy this worker loads first."""
     from app.pushes import largest_survived
     from app.run_spec import RunSpec
+    from controller import strategy
+
+    if strategy_file is not None:
+        strategy.load_file(strategy_file)
 
     params = RunSpec(method, step_length, 1, overrides=overrides).params() if overrides else None
     s = largest_survived(
@@ -341,7 +348,7 @@ def trade_cells(
 
     if s is None or study.pushes is None:
         return []
-    gain = paper.MAX_STEP["mpc"] - paper.MAX_STEP["fixed"]
+    gain = paper.MAX_STEP[MPC] - paper.MAX_STEP[FIXED]
     cells = dict(s.all_cells())
     names = []
     best = s.best_gain()
@@ -371,7 +378,7 @@ def trade_jobs(
     own = any(abs(x - p.trade_length) < 1e-9 for x in p.lengths)
     out = {}
     for _, ov in [("the defaults", ()), *cells]:
-        for m in ("fixed", "mpc"):
+        for m in (FIXED, MPC):
             eff = reads(m, ov)
             for d in p.directions:
                 key = (m, eff, d)
@@ -398,11 +405,11 @@ def trade(
         pushes: dict[str, dict[str, PushCell | None]] = {}
         for d in p.directions:
             pushes[d] = {}
-            for m in ("fixed", "mpc"):
+            for m in (FIXED, MPC):
                 key = (m, reads(m, ov), d)
                 own = rob_pushes.get(push_key(m, p.trade_length, d)) if not key[1] else None
                 pushes[d][m] = own or cell_pushes.get(key)
-        mpc_row = s.row("mpc", [list(o) for o in ov])
+        mpc_row = s.row(MPC, [list(o) for o in ov])
         rows.append(
             TradeRow(
                 name=name,
@@ -426,7 +433,8 @@ def robustness(
     cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] | None = None,
 ) -> RobustnessSection:
     cells = repeats(study, results)
-    pushes = pushes or {}
+    # the paper's methods' (section 10's other strategies keep theirs in their rows)
+    pushes = {k: v for k, v in (pushes or {}).items() if k.split("@")[0] in study.methods}
     return RobustnessSection(
         repeats=study.energy_repeats,
         steps=study.energy_steps,

@@ -41,6 +41,7 @@ from app.experiments.runs import Results
 from app.experiments.worker import execute
 from app.run_spec import Override, RunSpec
 from app.sweep.engine import Backend, OneJob, Task, make_backend, run_tasks
+from controller import strategy
 
 PROG = "pelvic-walk experiments"
 
@@ -55,19 +56,31 @@ def _run_jobs(requests: Requests, study: Study) -> list[tuple[RunSpec, OneJob]]:
 
 
 def _push_jobs(study: Study) -> list[tuple[str, OneJob]]:
+    """The robustness section's push bisections, and section 10's at its push length."""
     p = study.pushes
     if p is None:
         return []
+    cases = [(m, x) for x in p.lengths for m in study.methods]
+    if study.ablations is not None:
+        cases += [(m, study.ablations.push_length) for m in study.ablation_methods()]
     return [
         (
             push_key(m, x, d),
             OneJob(
-                push_job, m, x, d, p.duration, p.resolution, p.f_high, label=f"push {m} {x} {d}"
+                push_job,
+                m,
+                x,
+                d,
+                p.duration,
+                p.resolution,
+                p.f_high,
+                (),
+                strategy.info(m).source,
+                label=f"push {m} {x} {d}",
             ),
         )
-        for x in p.lengths
+        for m, x in cases
         for d in p.directions
-        for m in study.methods
     ]
 
 
@@ -102,7 +115,7 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
 
     clean = {
         m: {x: results[study.figure_run(m, x)].clean for x in study.sweep_grid}
-        for m in study.methods
+        for m in (*study.methods, *study.ablation_methods())
     }
     refine = refinement_runs(study, clean)
     second = _run_jobs(
@@ -142,11 +155,14 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
     )
 
 
-def command_of(quick: bool, jobs: int | None, ray: str | None, out: Path) -> str:
+def command_of(
+    quick: bool, jobs: int | None, ray: str | None, out: Path, strategies: tuple[str, ...] = ()
+) -> str:
     """The command line that reruns this study."""
     parts = [PROG, "--out", str(out)]
     if quick:
         parts.append("--quick")
+    parts += [f"--strategy {s}" for s in strategies]
     if jobs:
         parts += ["--jobs", str(jobs)]
     if ray is not None:
@@ -154,11 +170,18 @@ def command_of(quick: bool, jobs: int | None, ray: str | None, out: Path) -> str
     return " ".join(parts)
 
 
-def main(out: Path, quick: bool = False, jobs: int | None = None, ray: str | None = None) -> int:
+def main(
+    out: Path,
+    quick: bool = False,
+    jobs: int | None = None,
+    ray: str | None = None,
+    strategies: tuple[str, ...] = (),
+) -> int:
     """Run the study (``quick``: the smoke set) on the local pool or Ray and write
-    results.json, figures/ and report.md into ``out``. Exit 0; 1 if a run crashed; 2 (one
-    line) if Ray is missing or cannot be reached."""
-    study = QUICK if quick else FULL
+    results.json, figures/ and report.md into ``out``; ``strategies`` (``FILE.py[:Class]``,
+    loaded already) are studied beside the MPC in section 10. Exit 0; 1 if a run crashed; 2
+    (one line) if Ray is missing or cannot be reached."""
+    study = dataclasses.replace(QUICK if quick else FULL, strategies=tuple(strategies))
     n_jobs = jobs or os.cpu_count() or 1
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -176,7 +199,7 @@ def main(out: Path, quick: bool = False, jobs: int | None = None, ray: str | Non
     finally:
         backend.close()
     meta = Meta(
-        command=command_of(quick, jobs, ray, out),
+        command=command_of(quick, jobs, ray, out, tuple(strategies)),
         study=study.name,
         date_utc=started.strftime("%Y-%m-%d %H:%M UTC"),
         duration_s=time.perf_counter() - t0,

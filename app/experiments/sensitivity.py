@@ -25,6 +25,7 @@ from app.sim.metrics import KAPPA_SINGULAR
 from app.sweep.grid import Cell
 from app.sweep.measure import LimitSearch, LimitTask, criteria, outcome_of
 from controller.params import ControllerParams
+from controller.strategy import FIXED, MPC
 
 MPC_ONLY_GROUPS = ("pelvis",)  # parameter groups only the MPC reads
 # what a row keeps of each run (besides its length and outcome)
@@ -42,9 +43,7 @@ RUN_KEYS = (
 def effective(method: str, overrides: tuple[Override, ...]) -> tuple[Override, ...]:
     """The overrides ``method`` reads (sorted by name)."""
     keep = [
-        (n, v)
-        for n, v in overrides
-        if method == "mpc" or n.partition(".")[0] not in MPC_ONLY_GROUPS
+        (n, v) for n, v in overrides if method == MPC or n.partition(".")[0] not in MPC_ONLY_GROUPS
     ]
     return tuple(sorted(keep))
 
@@ -147,7 +146,7 @@ class SensitivitySection:
 
     def gain(self, overrides: Any, criterion: str = "clean") -> float | None:
         """The MPC's limit minus the fixed pelvis's at the same parameters [m]."""
-        m, f = self.limit("mpc", overrides, criterion), self.limit("fixed", overrides, criterion)
+        m, f = self.limit(MPC, overrides, criterion), self.limit(FIXED, overrides, criterion)
         return None if m is None or f is None else round(m - f, 3)
 
     def grid(self) -> list[tuple[Any, Any, list[list[Any]]]]:
@@ -263,7 +262,7 @@ def lateral_limits(sens: SensitivitySection | None) -> dict[str, dict[str, float
         return {}
     out = {}
     for mode in LATERAL_MODES:
-        r = sens.row("mpc", [[LATERAL, mode]])
+        r = sens.row(MPC, [[LATERAL, mode]])
         if r is not None:
             out[mode] = {"walks_limit": r.walks_limit, "clean_limit": r.clean_limit}
     return out

@@ -22,10 +22,12 @@ from app.experiments.runs import case_key
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
 from app.run_spec import DISTURBANCE
 from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from controller import strategy
+from controller.strategy import FIXED, MPC, REDUNDANCY
 
-GAIN = paper.MAX_STEP["mpc"] - paper.MAX_STEP["fixed"]  # [m] the paper's gain
+GAIN = paper.MAX_STEP[MPC] - paper.MAX_STEP[FIXED]  # [m] the paper's gain
 _CHEAP = paper.ENERGY_ROTATION_CHEAPER_UP_TO
-_DEAR = [x for x in paper.TABLE1_LENGTHS if _CHEAP < x <= paper.MAX_STEP["fixed"] + 1e-9]
+_DEAR = [x for x in paper.TABLE1_LENGTHS if _CHEAP < x <= paper.MAX_STEP[FIXED] + 1e-9]
 ENERGY_CLAIMS = {  # id -> in a few words
     "energy_std": "the MPC's smaller std",
     "energy_std_gap_grows": "the std gap growing with the length",
@@ -64,7 +66,7 @@ def trade_words(t: TradeRow) -> str:
         )
     pushes = []
     for d, by in t.pushes.items():
-        m, f = _survived(by.get("mpc")), _survived(by.get("fixed"))
+        m, f = _survived(by.get(MPC)), _survived(by.get(FIXED))
         if m is not None and f is not None:
             pushes.append(f"{m:.0f} against {f:.0f} N to the {d} ({m - f:+.0f} N)")
     if pushes:
@@ -83,7 +85,7 @@ def _trade_of(r: StudyResults, name: str) -> TradeRow | None:
 
 def _push_tally(rob: RobustnessSection, other: str) -> tuple[int, int, int]:
     """(pushes where the MPC survives more, less, of all) against ``other``."""
-    pushes = [c for c in stability(rob, "mpc", other) if c.what.startswith("push")]
+    pushes = [c for c in stability(rob, MPC, other) if c.what.startswith("push")]
     return (
         sum(c.order < 0 for c in pushes),
         sum(c.order > 0 for c in pushes),
@@ -100,10 +102,10 @@ def _heavy_falls(rob: RobustnessSection) -> tuple[str, dict[str, Any]] | None:
 def plain(study: Study, r: StudyResults) -> str | None:
     """The first paragraph: what the paper says and what we found, in plain words."""
     ms = r.max_step
-    f, m = ms["fixed"].longest_clean, ms["mpc"].longest_clean
+    f, m = ms[FIXED].longest_clean, ms[MPC].longest_clean
     if f is None or m is None:
         return None
-    pf, pm = paper.MAX_STEP["fixed"], paper.MAX_STEP["mpc"]
+    pf, pm = paper.MAX_STEP[FIXED], paper.MAX_STEP[MPC]
     text = (
         "The paper proposes that a humanoid robot turn its pelvis (its hips, about the "
         "vertical) while it walks, planned a moment ahead by a model-predictive controller "
@@ -118,11 +120,11 @@ def plain(study: Study, r: StudyResults) -> str | None:
     )
     rob = r.robustness
     if rob is not None and rob.pushes:
-        more, less, n = _push_tally(rob, "fixed")
+        more, less, n = _push_tally(rob, FIXED)
         if n:
             x = rob.push_setup.trade_length if rob.push_setup else rob.push_lengths[0]
             d = rob.directions[0]
-            mp, fp = _survived(rob.push("mpc", x, d)), _survived(rob.push("fixed", x, d))
+            mp, fp = _survived(rob.push(MPC, x, d)), _survived(rob.push(FIXED, x, d))
             example = (
                 f" (at {x:.2f} m, pushed to the {d}: {mp:.0f} N against {fp:.0f} N)"
                 if mp is not None and fp is not None
@@ -140,8 +142,8 @@ def plain(study: Study, r: StudyResults) -> str | None:
                     f"with a straight pelvis does in {n - less} of {n} cases{example}"
                 )
             heavy = _heavy_falls(rob)
-            if heavy and "mpc" in heavy[1] and "fixed" in heavy[1]:
-                cm, cf = heavy[1]["mpc"], heavy[1]["fixed"]
+            if heavy and MPC in heavy[1] and FIXED in heavy[1]:
+                cm, cf = heavy[1][MPC], heavy[1][FIXED]
                 text += (
                     f", and under random shoves {heavy[0]} strong it falls in {cm.fell} of "
                     f"{cm.runs} walks against {cf.fell} of {cf.runs}"
@@ -170,17 +172,17 @@ def plain(study: Study, r: StudyResults) -> str | None:
 
 def _limits(study: Study, r: StudyResults) -> str | None:
     ms = r.max_step
-    f, red, m = (ms[k].longest_clean for k in ("fixed", "redundancy", "mpc"))
+    f, red, m = (ms[k].longest_clean for k in (FIXED, REDUNDANCY, MPC))
     if f is None or m is None:
         return None
     text = (
         f"**Longest step (Sec. VI-B): {_v(r, 'max_step')}.** Clean on our model: fixed "
         f"{_m(f)}, redundancy {_m(red)}, MPC {_m(m)} m, the MPC {m - f:+.2f} m over the fixed "
         f"pelvis ({100 * (m / f - 1):+.0f} %); the paper: "
-        + " / ".join(f"{paper.MAX_STEP[k]:.2f}" for k in ("fixed", "redundancy", "mpc"))
+        + " / ".join(f"{paper.MAX_STEP[k]:.2f}" for k in (FIXED, REDUNDANCY, MPC))
         + f" m (+{GAIN:.2f} m)."
     )
-    if f > paper.MAX_STEP["fixed"] + 1e-9 and m - f < GAIN - 1e-9:
+    if f > paper.MAX_STEP[FIXED] + 1e-9 and m - f < GAIN - 1e-9:
         text += " Our fixed pelvis reaches farther than the paper's, so the gain is smaller."
     default = _trade_of(r, "the defaults")
     if default:
@@ -244,7 +246,7 @@ def _robustness(study: Study, r: StudyResults) -> str | None:
             + "."
         )
     if rob.pushes:
-        for other in ("redundancy", "fixed"):
+        for other in (REDUNDANCY, FIXED):
             more, less, n = _push_tally(rob, other)
             if n:
                 text += (
@@ -424,6 +426,32 @@ def _verdicts(study: Study, r: StudyResults) -> str | None:
     return text
 
 
+def _ablation(study: Study, r: StudyResults) -> str | None:
+    a = r.ablation
+    if a is None:
+        return None
+    by = {w.method: w for w in a.rows}
+    mpc = by.get(strategy.MPC)
+    if mpc is None:
+        return None
+    parts = []
+    for w in a.rows:
+        if w.role == "paper":
+            continue
+        pushes = ", ".join(
+            f"{_m(_survived(c), '.0f')} vs {_m(_survived(mpc.pushes.get(d)), '.0f')} N {d}"
+            for d, c in w.pushes.items()
+        )
+        parts.append(
+            f"{w.label} (`{w.method}`) {_m(w.longest_clean)} m clean"
+            + (f", pushes at {a.push_length:.2f} m {pushes}" if pushes else "")
+        )
+    return (
+        f"**What the MPC buys (section 10):** its longest clean step {_m(mpc.longest_clean)} m "
+        "against strategies without its plan over the horizon: " + "; ".join(parts) + "."
+    )
+
+
 LINES: tuple[Callable[[Study, StudyResults], str | None], ...] = (
     _verdicts,
     _limits,
@@ -432,6 +460,7 @@ LINES: tuple[Callable[[Study, StudyResults], str | None], ...] = (
     _energy,
     _kappa,
     _zmp,
+    _ablation,
 )
 
 

@@ -43,6 +43,7 @@ from app.experiments.definitions import LATERAL, ROTATING, Study
 from app.experiments.runs import Results, StepExtract, array, case_key, step_of, summary_of
 from app.sweep.measure import walks
 from controller.params import CONTROL_DT, LATERAL_MODES, ControllerParams
+from controller.strategy import MPC
 
 DEG = 180.0 / math.pi
 # The onset is found on 200 Hz samples: one sample either side of the lift-off is noise.
@@ -237,7 +238,7 @@ def _lateral_case(
     s, ex = summary_of(results, spec), step_of(results, spec)
     if s is None or ex is None or len(ex.t) < 3:
         return None
-    w = waist_case("mpc", x, ex)
+    w = waist_case(MPC, x, ex)
     return LateralCase(
         mode=mode,
         step_length=x,

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 
 from app.web import lesson_numbers
+from controller.strategy import FIXED, MPC
 
 
 # -- a tiny MathML builder ----------------------------------------------------------------------
@@ -320,7 +321,7 @@ def analysis_svg(theta_deg: float) -> str:
 def analysis_html(theta_deg: float, clean_limits: dict[str, float]) -> str:
     """The drawing with the numbers and what they mean (one percentage per reading)."""
     n = analysis_numbers(theta_deg)
-    ours = 100.0 * (clean_limits["mpc"] / clean_limits["fixed"] - 1.0)
+    ours = 100.0 * (clean_limits[MPC] / clean_limits[FIXED] - 1.0)
     k, lim = lesson_numbers.paper()["kinematics"], lesson_numbers.paper_limits()
     theta_p = lesson_numbers.paper()["robot"]["theta_pel_deg"]
     return f"""{analysis_svg(theta_deg)}

@@ -17,7 +17,7 @@ from app.live import FALL_HOLD_S
 from app.web import lesson_numbers
 from app.web.lesson_math import analysis_html, analysis_numbers, analysis_svg, equations
 from controller import strategy
-from controller.strategy import BUILTINS
+from controller.strategy import BUILTINS, FIXED, MPC, REDUNDANCY
 
 __all__ = [
     "CLEAN_LIMIT_M",
@@ -49,19 +49,19 @@ _EQ5 = _P["kinematics"]["step_max_rotation"]  # [m] eq. (5) as the paper evaluat
 #   0.42 m: fixed falls in its second step (3.13 s, torso tilted over 30 deg); mpc clean.
 PRESETS: dict[str, dict[str, Any]] = {  # button label (short: it must read whole) -> preset
     f"{PAPER_LIMIT_M['fixed']:.2f} m: every robot clean": {
-        "walk": {"step_length": PAPER_LIMIT_M["fixed"], "step_time": 1.2},
-        "methods": ["fixed", "redundancy", "mpc"],
+        "walk": {"step_length": PAPER_LIMIT_M[FIXED], "step_time": 1.2},
+        "methods": [FIXED, REDUNDANCY, MPC],
         "hint": "The paper's limit for the fixed pelvis: every robot walks cleanly here.",
     },
     f"{PAPER_LIMIT_M['mpc']:.2f} m: the fixed knee straightens": {
-        "walk": {"step_length": PAPER_LIMIT_M["mpc"], "step_time": 1.2},
-        "methods": ["fixed", "mpc"],
+        "walk": {"step_length": PAPER_LIMIT_M[MPC], "step_time": 1.2},
+        "methods": [FIXED, MPC],
         "hint": "The paper's limit with pelvic rotation: our fixed pelvis's swing knee "
         "straightens, the MPC stays clean.",
     },
     f"{_EQ5:.2f} m (eq. 5): the fixed pelvis falls": {
         "walk": {"step_length": _EQ5, "step_time": 1.2},
-        "methods": ["fixed", "mpc"],
+        "methods": [FIXED, MPC],
         "hint": "Eq. 5's step with the pelvis at 45 deg: our fixed pelvis falls, the MPC walks.",
     },
     "Defaults": {
@@ -110,8 +110,8 @@ class Lesson:
         return equations(*self.equations)
 
 
-_F, _M = CLEAN_LIMIT_M["fixed"], CLEAN_LIMIT_M["mpc"]
-_PF, _PM = PAPER_LIMIT_M["fixed"], PAPER_LIMIT_M["mpc"]
+_F, _M = CLEAN_LIMIT_M[FIXED], CLEAN_LIMIT_M[MPC]
+_PF, _PM = PAPER_LIMIT_M[FIXED], PAPER_LIMIT_M[MPC]
 _EQ4 = analysis_numbers(_P["robot"]["theta_pel_deg"])  # eq. (4), (5) with the paper's inputs
 
 LESSONS: tuple[Lesson, ...] = (
@@ -119,7 +119,7 @@ LESSONS: tuple[Lesson, ...] = (
         "1. Why the fixed pelvis cannot reach",
         "eq. 4-5, 45; Fig. 1-2, 13",
         {"step_length": _PM, "step_time": 1.2},
-        ("fixed", "mpc"),
+        (FIXED, MPC),
         "follow",
         f"At {_PM:.2f} m, the paper's limit with rotation, watch the fixed robot's <b>swing leg "
         "turn red</b> at each landing: its reach (hip-to-ankle / leg length) nears 1, the knee "
@@ -136,7 +136,7 @@ LESSONS: tuple[Lesson, ...] = (
         "2. What the prediction does",
         "eq. 25-33, 34-38; Fig. 5-7",
         {"step_length": 0.40, "step_time": 1.2},
-        ("mpc",),
+        (MPC,),
         "top",
         "Press <b>Pause</b> while both feet are down (phase <i>DSP</i> in the table above) "
         "and open the <b>Inspect</b> tab: the reference angle "
@@ -153,7 +153,7 @@ LESSONS: tuple[Lesson, ...] = (
         "3. What arm swing buys",
         "eq. 41-43; Fig. 12",
         {"step_length": 0.30, "step_time": 1.2},
-        ("fixed", "mpc"),
+        (FIXED, MPC),
         "follow",
         "The lesson starts with the arms still: each swinging leg twists the body about the "
         "vertical and the black yaw-momentum <b>arrow</b> over the head grows. Read the peak "
@@ -175,7 +175,7 @@ LESSONS: tuple[Lesson, ...] = (
         "4. Horizon length and k_pel",
         "eq. 31-37; Fig. 7",
         {"step_length": 0.40, "step_time": 1.2},
-        ("mpc",),
+        (MPC,),
         "top",
         "k_pel scales the reference angle for a given foot-to-pelvis distance (eq. 31): at 0.10 "
         "the pelvis turns less and the legs must reach further (the reach and kappa rise). Raise "
@@ -191,7 +191,7 @@ LESSONS: tuple[Lesson, ...] = (
         "5. Redundancy vs the MPC's waist rate",
         "eq. 37-40; Fig. 8-9",
         {"step_length": 0.40, "step_time": 1.2},
-        ("redundancy", "mpc"),
+        (REDUNDANCY, MPC),
         "follow",
         "Both robots turn the pelvis, differently. <b>Redundancy</b> (the waist is one more "
         "free IK joint) turns only once the foot swings, and its rate jumps at lift-off and "
@@ -207,7 +207,7 @@ LESSONS: tuple[Lesson, ...] = (
         "6. Eq. 1-5 against what the robots reach",
         "eq. 1-5; Fig. 1-2",
         {"step_length": _EQ5, "step_time": 1.2},
-        ("fixed", "mpc"),
+        (FIXED, MPC),
         "side",
         f"{_EQ5:.2f} m is eq. 5 with the pelvis at {_EQ4['theta']:.0f}° as the paper evaluates "
         "it (the Kinematic analysis below). Our fixed pelvis walks further than the static eq. 4 "
@@ -225,7 +225,7 @@ LESSONS: tuple[Lesson, ...] = (
         "7. A push: what the controller does",
         "eq. 10-18 (CoM MPC); no figure: the paper does not push",
         {"step_length": 0.30, "step_time": 1.2},
-        ("fixed", "redundancy", "mpc"),
+        (FIXED, REDUNDANCY, MPC),
         "front",
         "Open <b>Push a robot</b> (Controls tab) and push one robot sideways. The CoM MPC keeps "
         "its plan (its ZMP stays inside the support foot, eq. 18); the pelvis position "
@@ -242,7 +242,7 @@ LESSONS: tuple[Lesson, ...] = (
         "8. Your own pelvis",
         "eq. 27-40; the paper's question: how should the waist turn?",
         {"step_length": 0.40, "step_time": 1.2},
-        ("mpc",),
+        (MPC,),
         "follow",
         "Write how the pelvis turns in one Python file: a subclass of <code>PelvisStrategy</code> "
         "with a <code>name</code> and <code>waist_rate(self, s)</code>, which returns the waist "
@@ -361,9 +361,9 @@ def warnings_for(params: Any, methods: tuple[str, ...] = BUILTINS) -> list[str]:
             f"A double support of {1000 * w.dsp_ratio * w.step_time:.0f} ms leaves the CoM "
             "very little time to move to the new support foot."
         )
-    if params.pelvis.k_pel == 0.0 and "mpc" in methods:
+    if params.pelvis.k_pel == 0.0 and MPC in methods:
         out.append("k_pel = 0: the reference pelvic angle is 0, the MPC plans no rotation.")
-    names = {"fixed": "fixed", "redundancy": "redundancy", "mpc": "MPC"}
+    names = {FIXED: FIXED, REDUNDANCY: REDUNDANCY, MPC: "MPC"}
     shown = [m for m in BUILTINS if m in methods]  # the limits measured: the paper's three
     beyond = [m for m in shown if w.step_length > CLEAN_LIMIT_M[m] + 1e-9]
     if beyond:
