@@ -39,11 +39,13 @@ def _row(m: str, role: str, longest: float, waist: float, left: float, right: fl
         waist_peak_deg={"0.30": waist * 0.7, "0.40": waist},
         energy={"0.30": 40.0, "0.40": 50.0},
         energy_substep={"0.30": 60.0, "0.40": 70.0},
+        energy_std={"0.30": 1.0, "0.40": 1.0},
         early_turn_share=0.05,
         early_turn_of_sine=0.5,
         peak_rate_change_deg_s2=200.0,
         kappa_legs_landing=40.0,
         pushes={"left": _push(m, "left", left), "right": _push(m, "right", right)},
+        strategy_ms=0.02 if m == "mpc" else 0.005,
     )
 
 
@@ -86,6 +88,19 @@ def test_reading_compares_each_strategy_with_the_mpc():
     assert "the fixed pelvis's 0.37 m" in line
     assert "waist at 0.40 m 23.7 deg (MPC 25.1 deg)" in line
     assert "-6 N left, +4 N right" in line
+    assert ablation.buys(section, section.rows[2]) == (
+        "+0.01 m of longest clean step (one step of the grid); a largest shove +6 N left, "
+        "-4 N right; the same energy at 0.40 m within the windows' spread (+0.0 J, spread "
+        "1.0 J); at 4 x its time a tick"
+    )
+    # equal within the grid, the bisection and the spread: said so; beyond them: not
+    close = _row("gain", "example", 0.43, 23.7, 97.0, 75.0)
+    same = dataclasses.replace(section, rows=[*section.rows[:2], close], push_resolution=2.0)
+    words = ablation.buys(same, close)
+    assert words.startswith("the same longest clean step; the same largest shove within")
+    costly = dataclasses.replace(close, energy={"0.30": 40.0, "0.40": 53.0})
+    far = dataclasses.replace(section, rows=[*section.rows[:2], costly], push_resolution=2.0)
+    assert "+3.0 J less energy per two steps at 0.40 m" in ablation.buys(far, costly)
     # without the MPC's row there is nothing to compare with
     no_mpc = dataclasses.replace(section, rows=section.rows[2:])
     assert ablation.reading(no_mpc) == []

@@ -214,7 +214,7 @@ def test_sections_render_with_intact_tables():
     assert "- **does not hold**: the MPC's pelvic rotation is more stable" in eight
     assert "the MPC more stable in 0, less in 2, tied in 1 of 3" in eight
     # what the default gain costs, stated beside it
-    assert "k_pel = 0.25, the MPC's waist swings 25.0 deg at 0.40 m" in eight
+    assert "k_pel = 0.25, the MPC's waist peaks at 25.0 deg over a walk of 0.40 m steps" in eight
     assert "80 against 90 N to the left (-10 N)" in eight
 
 

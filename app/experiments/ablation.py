@@ -50,6 +50,7 @@ class AblationRow:
     waist_peak_deg: dict[str, float | None]  # figure length -> peak |waist angle|
     energy: dict[str, float | None]  # figure length -> two-step energy mean, 200 Hz [J]
     energy_substep: dict[str, float | None]  # the same from every 1 ms substep [J]
+    energy_std: dict[str, float | None]  # figure length -> std over the run's windows, 200 Hz
     early_turn_share: float | None  # at the longer figure length, share of the range
     early_turn_of_sine: float | None  # the same / a sine's over the step
     peak_rate_change_deg_s2: float | None
@@ -65,6 +66,7 @@ class AblationSection:
     push_length: float  # [m]
     resolution: float  # [m] of the longest step
     rows: list[AblationRow]
+    push_resolution: float = 0.0  # [N] of the push bisection
 
 
 def _role(m: str, study: Study) -> str:
@@ -106,6 +108,7 @@ def row(study: Study, results: Results, pushes: dict[str, PushCell | None], m: s
         waist_peak_deg={length_key(x): s.waist_yaw_max_deg if s else None for x, s in at.items()},
         energy={length_key(x): _energy(s, substep=False) for x, s in at.items()},
         energy_substep={length_key(x): _energy(s, substep=True) for x, s in at.items()},
+        energy_std={length_key(x): _energy_std(s) for x, s in at.items()},
         early_turn_share=turn.early_turn_share if turn else None,
         early_turn_of_sine=turn.early_turn_of_sine if turn else None,
         peak_rate_change_deg_s2=turn.peak_abs_rate_change_deg_s2 if turn else None,
@@ -121,6 +124,11 @@ def _energy(s: RunSummary | None, substep: bool) -> float | None:
         return None
     windows = s.energy_two_step_windows_substep if substep else s.energy_two_step_windows
     return float(np.mean(windows)) if windows else None
+
+
+def _energy_std(s: RunSummary | None) -> float | None:
+    w = s.energy_two_step_windows if s else []
+    return float(np.std(w, ddof=1)) if len(w) > 1 else None
 
 
 def _ms(s: RunSummary | None) -> float | None:
@@ -141,6 +149,7 @@ def ablation(
         push_length=study.ablations.push_length if study.ablations else max(study.figure_lengths),
         resolution=study.sweep_resolution,
         rows=[row(study, results, pushes or {}, m) for m in (*paper, *others)],
+        push_resolution=study.pushes.resolution if study.pushes else 0.0,
     )
 
 
@@ -186,6 +195,51 @@ def reading(section: AblationSection) -> list[str]:
             parts.append(f"energy at {section.turn_length:.2f} m {e:.1f} J (MPC {em:.1f} J)")
         out.append(f"**{r.label}** (`{r.method}`): " + "; ".join(parts) + ".")
     return out
+
+
+def buys(section: AblationSection, w: AblationRow) -> str:
+    """What the MPC's plan buys over strategy ``w``, in words: the longest clean step (against
+    the grid's resolution), the largest shove survived (against the bisection's), the energy at
+    the turn length (against the walks' spread), the time a tick."""
+    by = {r.method: r for r in section.rows}
+    mpc = by[strategy.MPC]
+    parts = []
+    if mpc.longest_clean is not None and w.longest_clean is not None:
+        d = mpc.longest_clean - w.longest_clean
+        if abs(d) < 1e-9:
+            parts.append("the same longest clean step")
+        else:
+            grid = " (one step of the grid)" if abs(d) <= section.resolution + 1e-9 else ""
+            parts.append(f"{d:+.2f} m of longest clean step{grid}")
+    gaps = {
+        d: _n(mpc.pushes.get(d)) - _n(c)  # type: ignore[operator]
+        for d, c in w.pushes.items()
+        if _n(c) is not None and _n(mpc.pushes.get(d)) is not None
+    }
+    if gaps:
+        if all(abs(g) <= section.push_resolution + 1e-9 for g in gaps.values()):
+            parts.append(
+                f"the same largest shove within the bisection's {section.push_resolution:g} N"
+            )
+        else:
+            parts.append("a largest shove " + ", ".join(f"{g:+.0f} N {d}" for d, g in gaps.items()))
+    x = length_key(section.turn_length)
+    e, em = w.energy.get(x), mpc.energy.get(x)
+    spread = max(
+        (v for v in (w.energy_std.get(x), mpc.energy_std.get(x)) if v is not None), default=None
+    )
+    if e is not None and em is not None:
+        less = e - em
+        if spread is not None and abs(less) <= spread:
+            parts.append(
+                f"the same energy at {section.turn_length:.2f} m within the windows' spread "
+                f"({less:+.1f} J, spread {spread:.1f} J)"
+            )
+        else:
+            parts.append(f"{less:+.1f} J less energy per two steps at {section.turn_length:.2f} m")
+    if w.strategy_ms and mpc.strategy_ms:
+        parts.append(f"at {mpc.strategy_ms / w.strategy_ms:.0f} x its time a tick")
+    return "; ".join(parts)
 
 
 def _m(v: float | None) -> str:

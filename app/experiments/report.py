@@ -17,6 +17,7 @@ import numpy as np
 
 from app.experiments import paper
 from app.experiments.ablation import AblationRow
+from app.experiments.ablation import buys as ablation_buys
 from app.experiments.ablation import reading as ablation_reading
 from app.experiments.definitions import (
     AUTHORS,
@@ -282,6 +283,7 @@ def _environment() -> jinja2.Environment:
         k_pel=_P.pelvis.k_pel,
         sine=sine_share(_P.walk.dsp_ratio),
         ablation_reading=ablation_reading,
+        ablation_buys=ablation_buys,
     )
     return env
 

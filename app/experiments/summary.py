@@ -15,9 +15,10 @@ from typing import Any
 import numpy as np
 
 from app.experiments import paper
+from app.experiments.ablation import buys
 from app.experiments.definitions import AUTHORS, Study
 from app.experiments.results import ClaimResult, StudyResults
-from app.experiments.robustness import PushCell, RobustnessSection, TradeRow, stability
+from app.experiments.robustness import PushCell, RobustnessSection, TradeRow, falls_p, stability
 from app.experiments.runs import case_key
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
 from app.run_spec import DISTURBANCE
@@ -61,8 +62,8 @@ def trade_words(t: TradeRow) -> str:
     text = f"k_pel = {t.k_pel:g}"
     if t.waist_deg is not None:
         text += (
-            f", the MPC's waist swings {t.waist_deg:.1f} deg at {t.waist_length:.2f} m (the "
-            f"paper's {paper.WAIST_PEAK_DEG:.0f} deg)"
+            f", the MPC's waist peaks at {t.waist_deg:.1f} deg over a walk of "
+            f"{t.waist_length:.2f} m steps (the paper's {paper.WAIST_PEAK_DEG:.0f} deg)"
         )
     pushes = []
     for d, by in t.pushes.items():
@@ -126,15 +127,16 @@ def plain(study: Study, r: StudyResults) -> str | None:
             d = rob.directions[0]
             mp, fp = _survived(rob.push(MPC, x, d)), _survived(rob.push(FIXED, x, d))
             example = (
-                f" (at {x:.2f} m, pushed to the {d}: {mp:.0f} N against {fp:.0f} N)"
+                f" (the largest shove survived at {x:.2f} m, pushed to the {d}: {mp:.0f} N "
+                f"against {fp:.0f} N)"
                 if mp is not None and fp is not None
                 else ""
             )
             if less > more:
                 text += (
-                    " The turning pelvis has a price: shoved sideways, the MPC robot topples at "
-                    f"a smaller shove than the one with a straight pelvis in {less} of {n} "
-                    f"cases{example}"
+                    " The turning pelvis has a price: shoved sideways, the MPC robot survives "
+                    f"only a smaller shove than the one with a straight pelvis in {less} of {n} "
+                    f"cases (three step lengths, two directions){example}"
                 )
             else:
                 text += (
@@ -144,9 +146,15 @@ def plain(study: Study, r: StudyResults) -> str | None:
             heavy = _heavy_falls(rob)
             if heavy and MPC in heavy[1] and FIXED in heavy[1]:
                 cm, cf = heavy[1][MPC], heavy[1][FIXED]
+                p = falls_p(cm, cf)
                 text += (
                     f", and under random shoves {heavy[0]} strong it falls in {cm.fell} of "
                     f"{cm.runs} walks against {cf.fell} of {cf.runs}"
+                    + (
+                        f" (p = {p:.2g}: with {cm.runs} walks each, not a significant difference)"
+                        if p >= 0.05
+                        else f" (p = {p:.2g})"
+                    )
                 )
             text += "."
     count = {v: sum(c.verdict == v for c in r.tallied) for v in (HOLDS, PARTLY, FAILS, DEPENDS)}
@@ -164,8 +172,9 @@ def plain(study: Study, r: StudyResults) -> str | None:
     )
     if r.checks:
         text += (
-            f" {len(r.checks)} more rows only check that our set-up reproduces what it was "
-            "chosen to reproduce; they are listed apart."
+            f" {len(r.checks)} more rows are listed apart, not counted: their inputs were chosen "
+            "to match the paper (or they follow from another rule), so they only check the "
+            "set-up."
         )
     return text
 
@@ -284,7 +293,8 @@ def _waist(study: Study, r: StudyResults) -> str | None:
         )
     if amp and amp.measured:
         text += (
-            f" Amplitude {amp.measured['peak']:.1f} deg at {paper.WAIST_PEAK_LENGTH:.2f} m "
+            f" Amplitude in the mid-walk step {amp.measured['peak']:.1f} deg at "
+            f"{paper.WAIST_PEAK_LENGTH:.2f} m "
             f"(paper {paper.WAIST_PEAK_DEG:.0f}): {amp.verdict}, a check (k_pel was chosen to "
             "give it)."
         )
@@ -428,28 +438,10 @@ def _verdicts(study: Study, r: StudyResults) -> str | None:
 
 def _ablation(study: Study, r: StudyResults) -> str | None:
     a = r.ablation
-    if a is None:
+    if a is None or not any(w.method == strategy.MPC for w in a.rows):
         return None
-    by = {w.method: w for w in a.rows}
-    mpc = by.get(strategy.MPC)
-    if mpc is None:
-        return None
-    parts = []
-    for w in a.rows:
-        if w.role == "paper":
-            continue
-        pushes = ", ".join(
-            f"{_m(_survived(c), '.0f')} vs {_m(_survived(mpc.pushes.get(d)), '.0f')} N {d}"
-            for d, c in w.pushes.items()
-        )
-        parts.append(
-            f"{w.label} (`{w.method}`) {_m(w.longest_clean)} m clean"
-            + (f", pushes at {a.push_length:.2f} m {pushes}" if pushes else "")
-        )
-    return (
-        f"**What the MPC buys (section 10):** its longest clean step {_m(mpc.longest_clean)} m "
-        "against strategies without its plan over the horizon: " + "; ".join(parts) + "."
-    )
+    parts = [f"over {w.label} (`{w.method}`) {buys(a, w)}" for w in a.rows if w.role != "paper"]
+    return "**What the MPC's plan buys (section 10):** " + "; ".join(parts) + "."
 
 
 LINES: tuple[Callable[[Study, StudyResults], str | None], ...] = (
