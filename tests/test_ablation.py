@@ -104,3 +104,20 @@ def test_reading_compares_each_strategy_with_the_mpc():
     # without the MPC's row there is nothing to compare with
     no_mpc = dataclasses.replace(section, rows=section.rows[2:])
     assert ablation.reading(no_mpc) == []
+
+
+def test_a_students_copy_of_an_example_keeps_its_name(tmp_path, capsys):
+    """A student's file that reuses an example's name wins; the example is left out, said once."""
+    mine = tmp_path / "my_sine.py"
+    mine.write_text(
+        "from pelvic_walk import PelvisStrategy\n\n\n"
+        "class MySine(PelvisStrategy):\n"
+        '    name = "sine"\n\n'
+        "    def waist_rate(self, s):\n"
+        "        return 0.0\n"
+    )
+    study = dataclasses.replace(QUICK, strategies=(str(mine),))
+    assert study.ablation_methods() == ("track_ref", "sine")
+    assert strategy.info("sine").source == f"{mine}:MySine"
+    err = capsys.readouterr().err
+    assert "leaves out the example feedforward_sine.py" in err and "taken by" in err

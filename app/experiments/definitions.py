@@ -22,7 +22,9 @@ Table 1 use come from there.
 
 from __future__ import annotations
 
+import functools
 import os
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -130,6 +132,12 @@ class Ablations:
     push_length: float = 0.30  # [m]
 
 
+@functools.cache
+def _skipped(why: str) -> None:
+    """Say once (on stderr) why an example is left out of section 10."""
+    print(f"note: {why}", file=sys.stderr)
+
+
 def _example(source: str) -> str:
     file, cls = strategy.parse_source(source)
     if not os.path.isabs(file):
@@ -165,12 +173,17 @@ class Study:
         example file is skipped: an installed package has no ``examples/``)."""
         if self.ablations is None and not self.strategies:
             return ()
-        found = []
+        yours = strategy.load_files(self.strategies)  # loaded first: a name is theirs
+        examples: list[str] = []
         for source in self.ablations.files if self.ablations else ():
             path = _example(source)
-            if os.path.isfile(strategy.parse_source(path)[0]):
-                found.append(path)
-        names = strategy.load_files([*found, *self.strategies])
+            if not os.path.isfile(strategy.parse_source(path)[0]):
+                continue
+            try:
+                examples += strategy.load_file(path)
+            except strategy.StrategyLoadError as exc:  # e.g. a copy of it under its name
+                _skipped(f"section 10 leaves out the example {source}: {exc}")
+        names = dict.fromkeys([*examples, *yours])  # in order, once each
         return tuple(m for m in names if m not in self.methods)
 
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
