@@ -116,6 +116,9 @@ def test_a_students_copy_of_an_example_keeps_its_name(tmp_path, capsys):
         "    def waist_rate(self, s):\n"
         "        return 0.0\n"
     )
+    for name in ("track_ref", "sine"):  # as in a fresh process: the student's file loads first
+        if strategy.is_registered(name):
+            strategy.unregister(name)
     study = dataclasses.replace(QUICK, strategies=(str(mine),))
     assert study.ablation_methods() == ("track_ref", "sine")
     assert strategy.info("sine").source == f"{mine}:MySine"
