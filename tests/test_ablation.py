@@ -45,7 +45,7 @@ def _row(m: str, role: str, longest: float, waist: float, left: float, right: fl
         peak_rate_change_deg_s2=200.0,
         kappa_legs_landing=40.0,
         pushes={"left": _push(m, "left", left), "right": _push(m, "right", right)},
-        strategy_ms=0.02 if m == "mpc" else 0.005,
+        strategy_ms_median=0.02 if m == "mpc" else 0.005,
     )
 
 

@@ -56,7 +56,7 @@ class AblationRow:
     peak_rate_change_deg_s2: float | None
     kappa_legs_landing: float | None  # median at landing, the longer figure length
     pushes: dict[str, PushCell | None] = field(default_factory=dict)  # direction -> survival
-    strategy_ms: float | None = None  # the strategy's median time a tick [ms]
+    strategy_ms_median: float | None = None  # the strategy's median time a tick [ms]
 
 
 @dataclass(frozen=True)
@@ -114,7 +114,7 @@ def row(study: Study, results: Results, pushes: dict[str, PushCell | None], m: s
         peak_rate_change_deg_s2=turn.peak_abs_rate_change_deg_s2 if turn else None,
         kappa_legs_landing=kc.kappa_legs_landing_median if kc else None,
         pushes={d: pushes.get(push_key(m, p, d)) for d in directions},
-        strategy_ms=_ms(at.get(x_turn)),
+        strategy_ms_median=_ms(at.get(x_turn)),
     )
 
 
@@ -237,8 +237,8 @@ def buys(section: AblationSection, w: AblationRow) -> str:
             )
         else:
             parts.append(f"{less:+.1f} J less energy per two steps at {section.turn_length:.2f} m")
-    if w.strategy_ms and mpc.strategy_ms:
-        parts.append(f"at {mpc.strategy_ms / w.strategy_ms:.0f} x its time a tick")
+    if w.strategy_ms_median and mpc.strategy_ms_median:
+        parts.append(f"at {mpc.strategy_ms_median / w.strategy_ms_median:.0f} x its time a tick")
     return "; ".join(parts)
 
 
