@@ -26,6 +26,7 @@ from app.local_server import local_server
 from app.web.auth import SEAT_COOKIE
 
 WAIT_S = 90.0  # [s] generous: a busy 2-core machine
+HTTP_S = 60.0  # [s] one answer of the server, on a busy 2-core machine
 
 
 @pytest.fixture(scope="module")
@@ -107,6 +108,12 @@ def wait_until(check, what: str, timeout: float = WAIT_S):
     pytest.fail(f"waited {timeout:.0f} s for {what}")
 
 
+def get(url: str) -> httpx.Response:
+    """GET with the suite's patience: on a loaded machine an answer may take longer than
+    httpx's default 5 s (seen: GET /api/health beside two busy loops)."""
+    return httpx.get(url, timeout=HTTP_S)
+
+
 def page_cookie(base: str) -> str:
     """The seat cookie the page gives a new browser (HttpOnly, this site only)."""
     r = httpx.get(f"{base}/", timeout=30)
@@ -132,7 +139,7 @@ def test_a_scene_connection_is_shown_its_own_session_only(tool):
         # a stranger's connection without a cookie gets a session of its own, never A's
         stranger = connect(ws_url)
         wait_until(
-            lambda: httpx.get(f"{base}/api/sessions").json()["private_sessions"] == 2,
+            lambda: get(f"{base}/api/sessions").json()["private_sessions"] == 2,
             "the stranger's own session",
         )
         assert mine(base, a)["viewers"] == 1
@@ -141,7 +148,7 @@ def test_a_scene_connection_is_shown_its_own_session_only(tool):
         forged = secrets.token_urlsafe(32)
         connect(ws_url, forged)
         wait_until(
-            lambda: httpx.get(f"{base}/api/health").json()["viewers_waiting"] == 1,
+            lambda: get(f"{base}/api/health").json()["viewers_waiting"] == 1,
             "the forged cookie's browser to wait in line",
         )
         assert mine(base, a)["viewers"] == 1 and mine(base, forged)["id"] is None
@@ -153,9 +160,9 @@ def test_a_scene_connection_is_shown_its_own_session_only(tool):
         stranger.close()
         got = wait_until(lambda: mine(base, forged)["id"], "the browser in line to get a session")
         assert got != sid
-        assert httpx.get(f"{base}/api/health").json()["viewers_waiting"] == 0
+        assert get(f"{base}/api/health").json()["viewers_waiting"] == 0
         # nobody learns A's id without A's cookie
-        listed = httpx.get(f"{base}/api/sessions").text + httpx.get(f"{base}/api/health").text
+        listed = get(f"{base}/api/sessions").text + get(f"{base}/api/health").text
         assert sid not in listed
         r = httpx.post(f"{base}/api/sessions/{sid}/sim/pause", timeout=30)
         assert r.status_code == 404
