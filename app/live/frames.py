@@ -42,6 +42,26 @@ class Horizon:
     lateral: np.ndarray  # (N, 2) [m] pelvis-to-foot lateral distance used by eq. (31)-(32)
     com_height: float  # [m] the LIPM's constant CoM height
 
+    def plane_columns(self) -> dict[str, np.ndarray]:
+        """The horizon's ground-plane paths as named columns [m] (``GET /api/horizon`` and
+        ``pelvic_walk``'s ``Run.horizon`` share these names)."""
+        return {
+            "com_x": self.com[:, 0],
+            "com_y": self.com[:, 1],
+            "zmp_x": self.zmp[:, 0],
+            "zmp_y": self.zmp[:, 1],
+            "zmp_ref_x": self.zmp_ref[:, 0],
+            "zmp_ref_y": self.zmp_ref[:, 1],
+            "zmp_min_x": self.zmp_lo[:, 0],
+            "zmp_max_x": self.zmp_hi[:, 0],
+            "zmp_min_y": self.zmp_lo[:, 1],
+            "zmp_max_y": self.zmp_hi[:, 1],
+            "left_foot_x": self.left_foot[:, 0],
+            "left_foot_y": self.left_foot[:, 1],
+            "right_foot_x": self.right_foot[:, 0],
+            "right_foot_y": self.right_foot[:, 1],
+        }
+
 
 @dataclass(frozen=True)
 class RobotFrame:
