@@ -80,8 +80,11 @@ def _abs(source: str) -> str:
     return os.path.abspath(os.path.expanduser(strategy.parse_source(source)[0]))
 
 
-def row(study: Study, results: Results, pushes: dict[str, PushCell | None], m: str) -> AblationRow:
-    """Section 10's measures of strategy ``m`` from the study's runs."""
+def row(
+    study: Study, results: Results, pushes: dict[str, PushCell | None], m: str, push_length: float
+) -> AblationRow:
+    """Section 10's measures of strategy ``m`` from the study's runs (its pushes at
+    ``push_length``)."""
     info = strategy.info(m)
     sums = {
         x: summary_of(results, study.figure_run(m, x))
@@ -94,7 +97,6 @@ def row(study: Study, results: Results, pushes: dict[str, PushCell | None], m: s
     ex = step_of(results, study.figure_run(m, x_turn))
     turn = waist_case(m, x_turn, ex) if ex is not None and len(ex.t) >= 3 else None
     kc = kappa_case(study, results, m, x_turn)
-    p = study.ablations.push_length if study.ablations else x_turn
     directions = study.pushes.directions if study.pushes else ()
     return AblationRow(
         method=m,
@@ -113,7 +115,7 @@ def row(study: Study, results: Results, pushes: dict[str, PushCell | None], m: s
         early_turn_of_sine=turn.early_turn_of_sine if turn else None,
         peak_rate_change_deg_s2=turn.peak_abs_rate_change_deg_s2 if turn else None,
         kappa_legs_landing=kc.kappa_legs_landing_median if kc else None,
-        pushes={d: pushes.get(push_key(m, p, d)) for d in directions},
+        pushes={d: pushes.get(push_key(m, push_length, d)) for d in directions},
         strategy_ms_median=_ms(at.get(x_turn)),
     )
 
@@ -143,12 +145,13 @@ def ablation(
     if not others:
         return None
     paper = [m for m in (strategy.FIXED, strategy.MPC) if m in study.methods]
+    x_push = study.ablations.push_length if study.ablations else max(study.figure_lengths)
     return AblationSection(
         lengths=list(study.figure_lengths),
         turn_length=max(study.figure_lengths),
-        push_length=study.ablations.push_length if study.ablations else max(study.figure_lengths),
+        push_length=x_push,
         resolution=study.sweep_resolution,
-        rows=[row(study, results, pushes or {}, m) for m in (*paper, *others)],
+        rows=[row(study, results, pushes or {}, m, x_push) for m in (*paper, *others)],
         push_resolution=study.pushes.resolution if study.pushes else 0.0,
     )
 
