@@ -10,9 +10,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from app.live import LiveSim
-from app.runs import SUMMARY_KEYS
 from app.web.api import create_app
 from controller.params import ControllerParams
+from pelvic_walk.core.run import SUMMARY_KEYS
 
 DT = ControllerParams().control_dt
 
@@ -382,7 +382,7 @@ def test_docs_assets_are_served_locally(client):
 
 def _outside_temp(monkeypatch, tmp_path):
     """Folders under ``tmp_path/home`` count as the user's own (not temporary) here."""
-    import app.report_dir as report_dir
+    import pelvic_walk.core.report_dir as report_dir
 
     home = tmp_path / "home"
     monkeypatch.setattr(report_dir, "is_temporary", lambda p: home not in Path(p).parents)
@@ -390,7 +390,7 @@ def _outside_temp(monkeypatch, tmp_path):
 
 
 def test_report_shows_the_reference_unless_the_user_wrote_one(live, tmp_path, monkeypatch):
-    from app.report_dir import record_report_dir, reference_report_dir
+    from pelvic_walk.core.report_dir import record_report_dir, reference_report_dir
 
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
     home = _outside_temp(monkeypatch, tmp_path)
@@ -446,7 +446,7 @@ def test_report_dir_option(live, tmp_path, monkeypatch):
 def test_tests_write_nothing_into_the_users_state():
     """The session-wide fixture of tests/conftest.py points XDG_STATE_HOME at a folder of the
     test session, so no test's `experiments` run lands in the user's ~/.local/state."""
-    from app.report_dir import state_file
+    from pelvic_walk.core.report_dir import state_file
 
     home_state = Path.home() / ".local" / "state"
     assert home_state not in state_file().parents
@@ -584,7 +584,7 @@ def test_a_served_tool_never_logs_the_token(tmp_path):
     bearer credential, right and wrong, and the token is in none of the tool's output."""
     import httpx
 
-    from app.local_server import local_server
+    from app.bench.local_server import local_server
 
     env = {**os.environ, "PELVIC_WALK_INSTRUCTOR_TOKEN": TOKEN, "PELVIC_WALK_DISPLAY_NICE": "0"}
     with local_server(("--workers", "0"), env=env) as server:

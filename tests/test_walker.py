@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.run_spec import RunSpec
-from app.runs import SUMMARY_KEYS, RunConfig, Session, run, summarize
 from controller.params import ControllerParams
+from pelvic_walk.core.run import SUMMARY_KEYS, RunConfig, Session, run, summarize
+from pelvic_walk.core.run_spec import RunSpec
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -175,7 +175,7 @@ def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
     assert s["solver_failures_by_layer"][name] == 10
     assert s["solver_failures"] == 10
     assert not s["fell"]
-    # 10 failed ticks of about 1400: within the share a success allows (app.sim.summary)
+    # 10 failed ticks of about 1400: within the share a success allows (pelvic_walk.core.summary)
     assert s["solver_failure_share"] == 10 / session.walker.ticks < 0.01 and s["success"]
 
 

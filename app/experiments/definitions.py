@@ -1,6 +1,7 @@
 """The study, as data: which runs each section needs.
 
-A run is a :class:`~app.run_spec.RunSpec`: method, step length, steps, arm swing, seed, and
+A run is a :class:`~pelvic_walk.core.run_spec.RunSpec`: method, step length, steps, arm swing,
+seed, and
 any other parameter of ``controller/params.py`` as ``("group.name", value)`` overrides.
 Sections ask for runs with the *extracts* they need from each (a summary always; ``"step"``:
 one mid-walk step at full rate; ``"walk"``: the walking phase down-sampled; ``"zmp"``: ZMP and
@@ -30,7 +31,10 @@ from pathlib import Path
 from typing import Any
 
 from app.experiments import paper
-from app.run_spec import (
+from controller import strategy
+from controller.params import LATERAL_MODES, ControllerParams
+from controller.strategy import FIXED, MPC, REDUNDANCY
+from pelvic_walk.core.run_spec import (
     DISTURBANCE,
     DISTURBANCE_PERIOD,
     SEED_PERTURBATION,
@@ -38,9 +42,6 @@ from app.run_spec import (
     RunSpec,
     length,
 )
-from controller import strategy
-from controller.params import LATERAL_MODES, ControllerParams
-from controller.strategy import FIXED, MPC, REDUNDANCY
 
 __all__ = [  # the run's own names, for the modules and tests that read them here
     "DISTURBANCE",
@@ -98,7 +99,8 @@ class Sensitivity:
 
 @dataclass(frozen=True)
 class Pushes:
-    """The largest sideways push each method survives (``app.pushes.largest_survived``), in
+    """The largest sideways push each method survives
+    (``pelvic_walk.core.pushes.largest_survived``), in
     both directions, bracketed to ``resolution``; and the same at ``trade_length`` in the
     sensitivity cells whose gain the report states (the push margin beside the gain)."""
 

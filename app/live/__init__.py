@@ -8,10 +8,10 @@
 - ``session``: :class:`LiveSim`, a session run by a thread, with the waits the API needs.
 """
 
-from app.live.frames import Horizon, LiveFrame, RobotFrame
 from app.live.intent import SPEED_MAX, SPEED_MIN, Intent, check_methods
 from app.live.loop import LIVE_STEPS, live_params
 from app.live.session import FALL_HOLD_S, LiveSim, Playback
+from pelvic_walk.core.frames import Horizon, LiveFrame, RobotFrame
 
 __all__ = [
     "FALL_HOLD_S",

@@ -25,7 +25,7 @@ class RunBusy(RuntimeError):
 
 
 class RunManager:
-    """Headless runs (``app.runs.run``) in one background worker thread.
+    """Headless runs (``pelvic_walk.core.run.run``) in one background worker thread.
 
     Bounded: at most ``max_pending`` runs queued or running (they share the CPU with the live
     tool), and only the ``keep`` most recent records are kept.
@@ -63,7 +63,7 @@ class RunManager:
         return run_id
 
     def _work(self, run_id: str, params: ControllerParams, seed: int | None) -> None:
-        from app.runs import run, spec_of, summarize
+        from pelvic_walk.core.run import run, spec_of, summarize
 
         self._set(run_id, status="running")
         try:
