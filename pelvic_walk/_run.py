@@ -16,6 +16,13 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from controller.analysis import (
+    PAPER_L_LEG,
+    PAPER_L_PEL,
+    PAPER_THETA_PEL_DEG,
+    PAPER_W_STEP,
+    PAPER_Z0,
+)
 from controller.params import ControllerParams
 from pelvic_walk import _params
 from pelvic_walk._plots import differing_params, labels, param_value
@@ -349,11 +356,11 @@ def compare(runs: Iterable[Run], keys: Sequence[str] | None = None) -> pd.DataFr
 
 
 def analyze(
-    l_leg: float = 0.75,
-    z0: float = 0.68,
-    l_pel: float = 0.21,
-    w_step: float = 0.243,
-    theta_pel_deg: float = 45.0,
+    l_leg: float = PAPER_L_LEG,
+    z0: float = PAPER_Z0,
+    l_pel: float = PAPER_L_PEL,
+    w_step: float = PAPER_W_STEP,
+    theta_pel_deg: float = PAPER_THETA_PEL_DEG,
     rule: str = "paper",
 ) -> dict[str, float]:
     """The kinematic analysis of eq. (1)-(5) (``pelvic-walk analyze``): the longest step

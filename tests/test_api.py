@@ -293,7 +293,7 @@ def test_run_manager_is_bounded():
     """More than max_pending queued runs are refused (429 at the API), old records pruned."""
     import threading
 
-    from app.web.api.runs import RunBusy, RunManager
+    from app.web.api.headless import RunBusy, RunManager
     from controller.params import ControllerParams
 
     params = ControllerParams()

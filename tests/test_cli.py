@@ -123,7 +123,7 @@ def test_a_seeded_api_run_is_the_clis_run(tmp_path):
     """POST /api/runs with a seed runs what `simulate --seed` runs (the study's repeat)."""
     import time
 
-    from app.web.api.runs import RunManager
+    from app.web.api.headless import RunManager
     from controller.params import ControllerParams
 
     cli = _simulate(tmp_path, "--seed", "2", steps="2")

@@ -12,10 +12,10 @@ from fastapi.exceptions import RequestValidationError
 from app.live.registry import SessionRegistry
 from app.live.session import SessionView
 from app.web.api.edges import finite, router, validation_handler
+from app.web.api.headless import RunManager, runs_router
 from app.web.api.live import session_router
 from app.web.api.pages import mount_docs_assets, pages_router
 from app.web.api.recording import recording_router
-from app.web.api.runs import RunManager, runs_router
 from app.web.api.sessions import Caller, caller_of, resolvers, reveal_to, sessions_router
 from app.web.api.strategies import strategies_router
 from app.web.auth import Instructor
