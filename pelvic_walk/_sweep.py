@@ -1,5 +1,5 @@
 """A parameter grid over methods from Python, on the engine of ``pelvic-walk sweep``
-(``app/sweep/``): the same grid checks, tasks, backends (process pool, Ray, in-process) and
+(``pelvic_walk/core``): the same grid checks, tasks, backends (process pool, Ray, in-process) and
 rows."""
 
 from __future__ import annotations
