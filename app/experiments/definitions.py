@@ -11,7 +11,8 @@ sections runs once and carries the union of the extracts.
 The sweep of the longest clean step (section 2) is adaptive: a coarse grid first
 (:attr:`Study.sweep_grid`), then :func:`refinement_runs` fills the gap between each method's
 last clean and first failed length at :attr:`Study.sweep_resolution`. The sensitivity
-section (:class:`Sensitivity`) runs the core's limit search (``pelvic_walk.core.measure``) over a grid of two parameters
+section (:class:`Sensitivity`) runs the core's limit search (``pelvic_walk.core.measure``) over a
+grid of two parameters
 and a few more cells; the robustness section reads Table 1's seeded repeats and adds seeded
 walks under larger pushes (:class:`Falls`) and the largest sideways push each method survives
 in both directions (:class:`Pushes`, ``pelvic-walk push-study``), also in the sensitivity cells

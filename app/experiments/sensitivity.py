@@ -1,6 +1,7 @@
 """Section 8: where the paper's +0.10 m of pelvic rotation appears on our model.
 
-The longest step that walks and the longest clean one (the core's limit search (``pelvic_walk.core.measure``), the same
+The longest step that walks and the longest clean one (the core's limit search
+(``pelvic_walk.core.measure``), the same
 as ``pelvic-walk sweep --measure limit``), for the fixed pelvis and the MPC, over a grid of
 two parameters (:class:`~app.experiments.definitions.Sensitivity`: k_pel x the DSP share) and
 a few more cells (the authors' DSP and step width, the step time, the lateral distance's
