@@ -28,9 +28,11 @@ from __future__ import annotations
 import numpy as np
 
 from controller.compiled import kernel
+from controller.explain import ActiveConstraint, QpExplain, explain_qp, joint_bound
 from controller.ik import velocity_bounds
 from controller.params import ArmParams
 from controller.qp import QP, QpSolver, frozen
+from models.dyros_jet import ARM_QP_JOINTS
 
 
 @kernel
@@ -113,3 +115,43 @@ def solve_arm(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:
     """Solve eq. (43); returns (q_dot_up (4,), ok). On failure: the solver's fallback."""
     res = solver.solve(qp)
     return res.x, res.ok
+
+
+def explain_arm(
+    qp: QP,
+    solver: QpSolver,
+    a_up_yaw: np.ndarray,
+    h_low: float,
+    q_min: np.ndarray,
+    q_max: np.ndarray,
+    qd_max: float,
+    params: ArmParams,
+    dt: float,
+) -> QpExplain:
+    """What the arm QP's last solve (``qp``) did: the cost of eq. (43) split into the yaw
+    momentum left over, the pull back to the arms' pose and the arm speed; each arm joint at
+    a bound. ``h_low``: the lower body's yaw momentum this tick (eq. 41); the pose error is
+    recovered from the QP's linear term."""
+    res = solver.last_result
+    assert res is not None and solver.last_qp is qp, "explain right after the solve"
+    x = res.x if res.ok else np.zeros(len(a_up_yaw))  # the walker holds the arms on failure
+    a = np.asarray(a_up_yaw, dtype=float)
+    w1, w2, w3 = params.omega1, params.omega2, params.omega3
+    # q = omega1 h_low a - omega2 dt r  ->  the pose error r = q_init - q_up
+    r = (w1 * h_low * a - qp.q) / (w2 * dt) if w2 > 0.0 else np.zeros_like(a)
+    pose = r - dt * x
+    terms = {
+        "yaw momentum left over (omega1)": 0.5 * w1 * float(h_low + a @ x) ** 2,
+        "back to the arm pose (omega2)": 0.5 * w2 * float(pose @ pose),
+        "arm speed (omega3)": 0.5 * w3 * float(x @ x),
+    }
+
+    def name(row: int, lam: float, bound: float) -> ActiveConstraint:
+        return joint_bound(
+            row, ARM_QP_JOINTS[row], lam, bound, qd_max, (float(q_min[row]), float(q_max[row]))
+        )
+
+    return explain_qp(
+        "arm_swing", qp, x, res.ok, res.status, solver, terms, name,
+        "held the arms: zero arm velocities this tick",
+    )  # fmt: skip

@@ -44,11 +44,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.compiled import kernel
+from controller.explain import ActiveConstraint, QpExplain, ahead_text, explain_qp, side_of
 from controller.footsteps import FootstepPlan
 from controller.params import ComMpcParams, horizon_samples
 from controller.qp import QP, QpSolver, frozen
 
 GRAVITY = 9.81  # [m/s^2]
+# which edge of the support a ZMP bound is, by axis and side (world x forward, y left)
+_EDGE = {
+    ("x", "upper"): "front",
+    ("x", "lower"): "back",
+    ("y", "upper"): "left",
+    ("y", "lower"): "right",
+}
 
 
 @dataclass(slots=True, eq=False)
@@ -296,4 +304,44 @@ class ComMpc:
             res.status,
             x0,
             self._zmp_maps,
+        )
+
+    # -- explanation (controller.explain; never in a tick) ----------------------------------
+    def explain(self, plan: ComPlan) -> QpExplain:
+        """What the last solve did (``plan``: its result): the cost of eq. (18) split into
+        ZMP tracking, velocity fluctuation and jerk, each ZMP bound the horizon leans on."""
+        assert self.params is not None and plan.state is not None
+        qp = self.solver.last_qp
+        assert qp is not None, "explain after a solve"
+        p, N, T = self.params, self.N, self.T
+        x0, U = plan.state, plan.jerk
+        Z = self.zmp_from_state @ x0 + self.zmp_from_jerk @ U  # (N, 2) eq. (16-17)
+        dV = self.dvel_from_state @ x0 + self.dvel_from_jerk @ U  # (N, 2) eq. (18)
+        terms = {
+            "ZMP tracking (alpha)": 0.5 * p.alpha * float(np.sum((Z - plan.zmp_ref) ** 2)),
+            "velocity fluctuation (beta)": 0.5 * p.beta * float(np.sum(dV**2)),
+            "jerk (gamma)": 0.5 * p.gamma * float(np.sum(U**2)),
+        }
+
+        def name(row: int, lam: float, bound: float) -> ActiveConstraint:
+            axis, k = ("x", row) if row < N else ("y", row - N)
+            side = side_of(lam, False)
+            ahead = (k + 1) * T
+            z = float((plan.zmp_hi if side == "upper" else plan.zmp_lo)[k, 0 if axis == "x" else 1])
+            return ActiveConstraint(
+                f"ZMP {axis} {side} bound at {ahead_text(ahead)} ({_EDGE[axis, side]} edge "
+                "of the support)",
+                "ZMP bound", side, lam, z, row, None, ahead, axis,
+            )  # fmt: skip
+
+        return explain_qp(
+            "com_mpc",
+            qp,
+            U.T.ravel(),
+            plan.ok,
+            plan.status,
+            self.solver,
+            terms,
+            name,
+            "the previous optimal jerks, shifted by the time since they were computed",
         )

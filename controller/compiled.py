@@ -458,6 +458,7 @@ class DaqpWorkspace:
         if binding is None:
             self._model = daqp.Model()
             self._stats = (math.nan, -1)  # the last solve's objective and iterations
+            self._solve_time = math.nan  # [s] the last solve's, as DAQP measured it
             return
         self.setup_time = np.zeros(1)
         ptr = ctypes.c_void_p
@@ -523,6 +524,10 @@ class DaqpWorkspace:
             return -2, flag
         x, fval, exitflag, info = model.solve()
         self._stats = (fval, info["iterations"])
+        self._solve_time = float(info.get("solve_time", math.nan))
+        lam = info.get("lam")
+        if lam is not None and len(lam) == len(self.lam):  # the duals, as the binding has them
+            self.lam[:] = lam
         if exitflag < 1 or not np.isfinite(x).all():
             return -3, exitflag
         out[:] = x
@@ -533,3 +538,10 @@ class DaqpWorkspace:
         if self._binding is None:
             return self._stats
         return self._result.fval, self._result.iter
+
+    def solve_time(self) -> float:
+        """[s] the last solve's time as DAQP measured it (NaN unknown)."""
+        if self._binding is None:
+            return self._solve_time
+        t = float(self._result.solve_time)
+        return t if t > 0.0 else math.nan

@@ -46,8 +46,10 @@ import math
 import numpy as np
 
 from controller.compiled import kernel
+from controller.explain import ActiveConstraint, QpExplain, explain_qp, joint_bound
 from controller.params import IkParams
 from controller.qp import QP, QpSolver, frozen
+from models.dyros_jet import LOWER_JOINTS
 
 WAIST = 0  # index of the waist yaw in q_low (13,)
 N_LOW = 13
@@ -142,6 +144,65 @@ def solve_ik(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:
     (its previous solution, or zeros)."""
     res = solver.solve(qp)
     return res.x, res.ok
+
+
+def explain_ik(
+    qp: QP,
+    solver: QpSolver,
+    J_low: np.ndarray,
+    q_min: np.ndarray,
+    q_max: np.ndarray,
+    params: IkParams,
+    dt: float,
+) -> QpExplain:
+    """What the IK's last solve (``qp``, by ``solver``) did: the cost of eq. (39) split into
+    the left foot's task, the right foot's, the damping and (free waist) the waist's
+    regularisation; each joint at an angle or speed bound, and the waist's pinned rate.
+
+    The desired foot twists are recovered from the QP's linear term (c = -J'v on the rows
+    the waist's regularisation leaves alone), so the tick keeps nothing for this."""
+    res = solver.last_result
+    assert res is not None and solver.last_qp is qp, "explain right after the solve"
+    J = np.asarray(J_low, dtype=float)
+    x = res.x if res.ok else np.zeros(N_LOW)  # the walker holds the last command on failure
+    w, d = params.redundancy_weight, params.damping
+    extra = qp.P[WAIST, WAIST] - (J[:, WAIST] @ J[:, WAIST]) - d
+    free = w > 0.0 and abs(extra - w * dt * dt) <= 1e-9 * (1.0 + abs(extra))
+    cols = slice(1, None) if free else slice(None)  # the rows c = -J'v holds exactly
+    v, *_ = np.linalg.lstsq(J[:, cols].T, -qp.q[cols], rcond=None)
+    q_waist = (qp.q[WAIST] + J[:, WAIST] @ v) / (w * dt) if free else 0.0
+    r = J @ x - v
+    terms = {
+        "left foot task": 0.5 * float(r[:6] @ r[:6]),
+        "right foot task": 0.5 * float(r[6:] @ r[6:]),
+        "damping": 0.5 * d * float(x @ x),
+    }
+    if free:
+        terms["waist regularisation (redundancy)"] = 0.5 * w * (q_waist + dt * x[WAIST]) ** 2
+    pinned = not free and qp.l[WAIST] == qp.u[WAIST]
+    speed = params.joint_speed_limit
+
+    def name(row: int, lam: float, bound: float) -> ActiveConstraint:
+        if row == WAIST and pinned:
+            return ActiveConstraint(
+                f"waist rate pinned by the strategy ({bound:+.3f} rad/s)",
+                "pinned", "pinned", lam, bound, row, LOWER_JOINTS[WAIST],
+            )  # fmt: skip
+        return joint_bound(
+            row, LOWER_JOINTS[row], lam, bound, speed, (float(q_min[row]), float(q_max[row]))
+        )
+
+    return explain_qp(
+        "ik",
+        qp,
+        x,
+        res.ok,
+        res.status,
+        solver,
+        terms,
+        name,
+        "held the last command: zero joint velocities this tick",
+    )
 
 
 @kernel

@@ -54,6 +54,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from controller.compiled import kernel
+from controller.explain import ActiveConstraint, QpExplain, ahead_text, explain_qp, side_of
 from controller.params import PelvisMpcParams
 from controller.qp import QP, QpSolver, frozen
 
@@ -225,3 +226,49 @@ class PelvisMpc:
             u[k] = np.clip(-rate / T, -acc, acc)
             rate += T * u[k]
         return u
+
+    # -- explanation (controller.explain; never in a tick) ----------------------------------
+    def explain(self, plan: PelvisPlan) -> QpExplain:
+        """What the last solve did (``plan``: its result): the cost of eq. (37) split into
+        angle tracking and acceleration, each angle or acceleration bound that binds. The
+        acceleration rows' multipliers are given per rad/s^2 (the QP scales those rows)."""
+        qp = self.solver.last_qp
+        assert qp is not None, "explain after a solve"
+        n, T, s = self.n_samples, self.sample_time, self._acc_scale
+        a, b = self.params.alpha, self.params.beta
+        terms = {
+            "waist angle tracking (alpha)": 0.5
+            * a
+            * float(np.sum((plan.angles - plan.reference) ** 2)),
+            "yaw acceleration (beta)": 0.5 * b * float(np.sum(plan.acc**2)),
+        }
+        limit_deg = self.params.angle_limit_deg
+        acc = self.params.acc_limit
+
+        def name(row: int, lam: float, bound: float) -> ActiveConstraint:
+            side = side_of(lam, False)
+            sign = "+" if side == "upper" else "-"
+            if row < n:
+                ahead = (row + 1) * T
+                return ActiveConstraint(
+                    f"waist angle limit ({sign}{limit_deg:g} deg) at {ahead_text(ahead)}",
+                    "angle limit", side, lam, math.radians(limit_deg) * (1 if sign == "+" else -1),
+                    row, None, ahead,
+                )  # fmt: skip
+            k = row - n
+            return ActiveConstraint(
+                f"waist acceleration limit ({sign}{acc:g} rad/s^2) at {ahead_text(k * T)}",
+                "acceleration limit", side, lam * s, acc if sign == "+" else -acc, row, None, k * T,
+            )  # fmt: skip
+
+        return explain_qp(
+            "pelvis_mpc",
+            qp,
+            plan.angles,
+            plan.ok,
+            self.solver.last_result.status if self.solver.last_result is not None else "",
+            self.solver,
+            terms,
+            name,
+            "a brake: the waist rate brought to 0 at the acceleration bound",
+        )

@@ -34,7 +34,7 @@ kernel that does not compile) raises as any error does.
 from __future__ import annotations
 
 import math
-from typing import NamedTuple
+from typing import Any, NamedTuple
 
 import numpy as np
 import osqp
@@ -107,6 +107,11 @@ class QpSolver:
         self._A_obj: np.ndarray | None = None
         self.x_prev: np.ndarray | None = None
         self.failures = 0
+        # the last QP solved and its result, held (not copied) for an explanation on demand
+        # (controller.explain); a tick does nothing more for it
+        self.last_qp: QP | None = None
+        self.last_result: QpResult | None = None
+        self._osqp_info: Any = None
 
     # -- OSQP ------------------------------------------------------------------------------
     def _setup_osqp(self, qp: QP) -> None:
@@ -153,6 +158,7 @@ class QpSolver:
         except osqp.OSQPException as exc:
             return None, f"osqp: {exc}"
         res = self._solver.solve(raise_error=False)
+        self._osqp_info = res.info  # for last_stats
         status = str(res.info.status)
         if res.info.status_val not in (1, 2) or res.x is None or not math.isfinite(res.x.sum()):
             return None, status
@@ -214,9 +220,48 @@ class QpSolver:
             # re-setup next time: the workspace may be poisoned
             self._solver = self._daqp = None
             self._P_obj = self._A_obj = None
-            return QpResult(fallback, False, status)
+            self.last_qp, res = qp, QpResult(fallback, False, status)
+            self.last_result = res
+            return res
         self.x_prev = x
-        return QpResult(x, True, status)
+        self.last_qp, res = qp, QpResult(x, True, status)
+        self.last_result = res
+        return res
+
+    # -- what the last solve did (controller.explain; not called in a tick) ----------------
+    def last_duals(self, qp: QP) -> np.ndarray | None:
+        """DAQP's multipliers (m,) of the last solve if it was ``qp`` and it succeeded (a
+        view of the workspace: the next solve overwrites it), else None."""
+        res = self.last_result
+        if self._daqp is None or self.last_qp is not qp or res is None or not res.ok:
+            return None
+        return self._daqp.lam
+
+    def last_stats(self, qp: QP) -> tuple[int, float]:
+        """(iterations, solve time [ms]) of the last solve if it was ``qp`` (-1, NaN unknown)."""
+        if self.last_qp is not qp:
+            return -1, math.nan
+        if self._daqp is not None:
+            return int(self._daqp.stats()[1]), self._daqp.solve_time() * 1e3
+        info = self._osqp_info
+        if info is not None:
+            return int(info.iter), float(info.solve_time) * 1e3
+        return -1, math.nan
+
+    def active_count(self) -> float:
+        """Constraints active at the last solution (DAQP: its non-zero duals; OSQP: rows at a
+        bound), NaN before any solve or after a failed one. Cheap: the series reads it every
+        tick."""
+        res = self.last_result
+        if res is None or not res.ok:
+            return math.nan
+        if self._daqp is not None:
+            return float(np.count_nonzero(self._daqp.lam))
+        qp = self.last_qp
+        assert qp is not None
+        ax = qp.A @ res.x
+        tol = 1e-7 * (1.0 + np.abs(qp.u))
+        return float(np.count_nonzero((np.abs(ax - qp.u) <= tol) | (np.abs(ax - qp.l) <= tol)))
 
 
 def _valid(qp: QP, P_known: np.ndarray | None, A_known: np.ndarray | None) -> bool:
