@@ -50,6 +50,12 @@ COLUMNS = (
     "step_index",
     "in_ssp",
     "speed_limited",  # 1 if a joint velocity sat at the IK's speed limit
+    # active constraints of each layer's QP at its solution (controller.explain; NaN: the
+    # layer solved no QP this tick, e.g. the pelvic MPC of another method, or it failed)
+    "active_com_mpc",
+    "active_pelvis_mpc",
+    "active_ik",
+    "active_arm_swing",
 )
 
 
@@ -89,6 +95,10 @@ COLUMN_UNITS: dict[str, str] = {
     "step_index": "",
     "in_ssp": "",
     "speed_limited": "",
+    "active_com_mpc": "",
+    "active_pelvis_mpc": "",
+    "active_ik": "",
+    "active_arm_swing": "",
 }
 assert tuple(COLUMN_UNITS) == COLUMNS, "one unit per column, in the columns' order"
 

@@ -25,6 +25,7 @@ from controller.footsteps import FootstepPlan
 from controller.kinematics import RobotKinematics
 from controller.params import ControllerParams
 from controller.strategy import StrategyError
+from controller.tick_explain import active_counts
 from controller.walker import TickOutput, Walker
 from models.dyros_jet import ROBOT_XML
 from pelvic_walk.core.metrics import COL, COLUMNS, Series, two_step_windows
@@ -298,6 +299,12 @@ class Session:
         row[c.step_index] = out.step_index
         row[c.in_ssp] = out.in_ssp
         row[c.speed_limited] = out.speed_limited
+        (
+            row[c.active_com_mpc],
+            row[c.active_pelvis_mpc],
+            row[c.active_ik],
+            row[c.active_arm_swing],
+        ) = active_counts(self.walker)
         self.series.append_values(row)
 
     def _bookkeep(self, out: TickOutput, m: Measurement) -> None:
