@@ -326,7 +326,7 @@ class ComMpc:
         def name(row: int, lam: float, bound: float) -> ActiveConstraint:
             axis, k = ("x", row) if row < N else ("y", row - N)
             side = side_of(lam, False)
-            ahead = (k + 1) * T
+            ahead = round((k + 1) * T, 6)
             z = float((plan.zmp_hi if side == "upper" else plan.zmp_lo)[k, 0 if axis == "x" else 1])
             return ActiveConstraint(
                 f"ZMP {axis} {side} bound at {ahead_text(ahead)} ({_EDGE[axis, side]} edge "

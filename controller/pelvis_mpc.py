@@ -249,7 +249,7 @@ class PelvisMpc:
             side = side_of(lam, False)
             sign = "+" if side == "upper" else "-"
             if row < n:
-                ahead = (row + 1) * T
+                ahead = round((row + 1) * T, 6)
                 return ActiveConstraint(
                     f"waist angle limit ({sign}{limit_deg:g} deg) at {ahead_text(ahead)}",
                     "angle limit", side, lam, math.radians(limit_deg) * (1 if sign == "+" else -1),
@@ -258,7 +258,7 @@ class PelvisMpc:
             k = row - n
             return ActiveConstraint(
                 f"waist acceleration limit ({sign}{acc:g} rad/s^2) at {ahead_text(k * T)}",
-                "acceleration limit", side, lam * s, acc if sign == "+" else -acc, row, None, k * T,
+                "acceleration limit", side, lam * s, acc if sign == "+" else -acc, row, None, round(k * T, 6),
             )  # fmt: skip
 
         return explain_qp(

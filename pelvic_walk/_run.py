@@ -33,6 +33,7 @@ if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
 
+    from controller.explain import TickExplain
     from pelvic_walk.core.capture import Capture
     from pelvic_walk.core.frames import LiveFrame
 
@@ -150,6 +151,29 @@ class Run:
         df = pd.DataFrame({with_unit(c, u): np.asarray(values[c]) for c, u in HORIZON_COLUMNS})
         df.attrs["t"] = round(robot.t, 6)
         return df
+
+    def qp(self, t: float) -> TickExplain:
+        """What each layer's optimisation did at time ``t`` [s] (the nearest recorded
+        instant, 20 a second; ``.t`` is its time): for the CoM MPC, the pelvic MPC, the IK
+        and the arm swing (``rec["ik"]``), the solver's status, iterations and time, the cost
+        split into its named terms (``.terms``, adding up to ``.objective``), every active
+        constraint by name with its multiplier (``.active``, ``.names()``), and what the
+        fallback did when a solve failed. ``rec.to_dict()`` is ``GET /api/qp``'s ``layers``.
+        The series' ``active_*`` columns count the active constraints at every tick."""
+        t = float(t)
+        if not math.isfinite(t):
+            raise ValueError(f"t must be a finite time [s], got {t}")
+        frames = [f for f in self._frames if f.robots[0].qp is not None]
+        if not frames:
+            raise ValueError("the run recorded no QP (it stopped before its first tick)")
+        times = np.array([f.robots[0].t for f in frames])
+        if t < times[0] - 0.05 or t > times[-1] + 0.05:
+            raise ValueError(
+                f"t = {t:g} s is outside the run ({times[0]:.2f} to {times[-1]:.2f} s)"
+            )
+        rec = frames[int(np.argmin(np.abs(times - t)))].robots[0].qp
+        assert rec is not None
+        return rec
 
     @property
     def command(self) -> str:

@@ -17,7 +17,9 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from controller.footsteps import FootstepPlan
+from controller.explain import TickExplain
 from controller.params import ControllerParams
+from controller.tick_explain import explain_tick
 from models.dyros_jet import ANKLE_BODIES, HIP_BODIES
 from pelvic_walk.core.metrics import KAPPA_SINGULAR
 from pelvic_walk.core.session import Session
@@ -167,6 +169,10 @@ class RobotFrame:
     params: ControllerParams  # the parameters in force in this robot's walker
     # why its finished plan is no success, in words ("" otherwise: pelvic_walk.core.summary)
     unsuccessful: str = ""
+    # what each layer's QP did at the tick (controller.explain), made with the frame: at the
+    # display's or the recording's rate, never in a tick; None before the first tick or once
+    # its strategy failed
+    qp: TickExplain | None = None
 
     @property
     def status(self) -> str:
@@ -314,6 +320,7 @@ def robot_frame(
         plan=plan,
         params=session.walker.snapshot_params(),
         unsuccessful=_unsuccessful(session) if session.walker.finished else "",
+        qp=explain_tick(session.walker, out) if out is not None and error is None else None,
     )
 
 
