@@ -256,9 +256,11 @@ class PelvisMpc:
                     row, None, ahead,
                 )  # fmt: skip
             k = row - n
+            ahead = round(k * T, 6)
             return ActiveConstraint(
-                f"waist acceleration limit ({sign}{acc:g} rad/s^2) at {ahead_text(k * T)}",
-                "acceleration limit", side, lam * s, acc if sign == "+" else -acc, row, None, round(k * T, 6),
+                f"waist acceleration limit ({sign}{acc:g} rad/s^2) at {ahead_text(ahead)}",
+                "acceleration limit", side, lam * s, acc if sign == "+" else -acc, row, None,
+                ahead,
             )  # fmt: skip
 
         return explain_qp(

@@ -16,8 +16,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.footsteps import FootstepPlan
 from controller.explain import TickExplain
+from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
 from controller.tick_explain import explain_tick
 from models.dyros_jet import ANKLE_BODIES, HIP_BODIES
