@@ -771,6 +771,71 @@ def test_seek_shows_a_kept_instant_while_paused(client, live):
     assert client.get("/api/state").json()["shown_t"] is None
 
 
+def _qp(client, live, method: str = "mpc"):
+    """GET /api/qp, waiting through a restart (409 until the robot has ticked again)."""
+    for _ in range(200):
+        r = client.get("/api/qp", params={"method": method})
+        if r.status_code != 409:
+            break
+        _wait_newer(live, 1)
+    assert r.status_code == 200, r.text
+    return r.json()
+
+
+def test_qp_explains_the_four_layers_of_a_robot(client, live):
+    for method in ("mpc", "fixed"):
+        body = _qp(client, live, method)
+        assert body["method"] == method and "active" in body["meaning"]
+        layers = {e["layer"]: e for e in body["layers"]}
+        assert list(layers) == ["com_mpc", "pelvis_mpc", "ik", "arm_swing"]
+        assert layers["pelvis_mpc"]["ran"] is (method == "mpc")
+        for e in body["layers"]:
+            if e["ran"] and e["ok"]:
+                assert sum(e["terms"].values()) == pytest.approx(e["objective"], abs=1e-12)
+        for c in layers["ik"]["active"]:  # both pin the waist: the pin is a row of its own
+            pin = c["name"].startswith("waist rate pinned by the strategy")
+            assert pin == (c["side"] == "pinned") and c["multiplier"] >= 0
+    assert client.get("/api/qp", params={"method": "redundancy"}).status_code == 422
+
+
+def test_qp_is_in_the_openapi_schema_with_its_response_model(client):
+    schema = client.get("/openapi.json").json()
+    op = schema["paths"]["/api/qp"]["get"]
+    ref = op["responses"]["200"]["content"]["application/json"]["schema"]["$ref"]
+    assert ref.endswith("/QpResponse")
+    comps = schema["components"]["schemas"]
+    assert {"session", "method", "clock", "t", "meaning", "layers"} <= set(
+        comps["QpResponse"]["properties"]
+    )
+    assert {"terms", "active", "fallback", "iterations", "solve_ms"} <= set(
+        comps["QpLayer"]["properties"]
+    )
+    assert {"name", "multiplier", "side", "joint"} <= set(comps["QpConstraint"]["properties"])
+    assert "/api/sessions/{sid}/qp" in schema["paths"]
+
+
+def test_qp_follows_a_seek(client, live):
+    _wait_newer(live, 10)
+    client.post("/api/sim/pause")
+    try:
+        state = client.get("/api/state").json()
+        start, end = state["kept"]["start"], state["kept"]["end"]
+        for target in (start + 0.3 * (end - start), start + 0.8 * (end - start)):
+            assert client.post("/api/sim/seek", json={"t": target}).status_code == 200
+            shown = live.frames.nearest(target)
+            r = client.get("/api/qp")
+            robot = shown.robot("mpc")
+            if robot is None or robot.qp is None:
+                assert r.status_code == 409
+                continue
+            assert r.status_code == 200, r.text
+            body = r.json()
+            assert body["clock"] == pytest.approx(shown.clock)
+            assert body["t"] == pytest.approx(robot.qp.t)
+    finally:
+        client.post("/api/sim/resume")
+
+
 def test_push_is_applied_or_refused_with_a_message(client, live):
     r = client.post("/api/sim/push", json={"method": "mpc", "force": [0, 40], "duration": 0.1})
     assert r.status_code == 200

@@ -2,7 +2,8 @@
 
 Routes (docs/REFERENCE.md, "HTTP API"): ``GET /api/health``; ``GET``/``PUT /api/params``;
 ``POST /api/sim/pause|resume|reset|step|seek|push`` (and ``PUT /api/sim/speed``);
-``GET /api/state``; ``GET /api/horizon``; ``POST /api/runs`` and ``GET /api/runs/{id}``;
+``GET /api/state``; ``GET /api/horizon``; ``GET /api/qp``; ``POST /api/runs`` and
+``GET /api/runs/{id}``;
 ``GET /api/recording`` (the last seconds as a file that plays back without the server);
 ``GET /api/sessions`` (and ``/api/sessions/{sid}/...`` for each session-scoped route);
 ``GET /`` (the page framing the viser scene), ``/report``, ``/docs``.

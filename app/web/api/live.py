@@ -1,4 +1,4 @@
-"""Routes that act on one live session: parameters, playback, state, horizon, seek, push.
+"""Routes that act on one live session: parameters, playback, state, horizon, QP, seek, push.
 
 Thin: each route writes intent (and waits until the loop has carried it out) or reads the
 frame the displays show. The same routes serve ``/api/...`` (the shared session, or the one
@@ -29,6 +29,7 @@ from app.web.api.models import (
     ParamsModel,
     ParamsUpdate,
     PushRequest,
+    QpResponse,
     SeekRequest,
     SpeedRequest,
     StateResponse,
@@ -134,6 +135,22 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
             "theta_deg": h.theta * deg,
         }
     )
+
+
+def qp_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
+    """``GET /api/qp``: what one robot's four QPs did at the shown instant."""
+    frame = _shown(session)
+    shown = [r.method for r in frame.robots]
+    robot = frame.robot(method) if method else (frame.robot(strategy.MPC) or frame.robots[0])
+    if robot is None:
+        raise unprocessable(f"no robot {method!r} is shown (robots: {', '.join(shown)})")
+    rec = robot.qp
+    if rec is None:
+        raise conflict(
+            "the robot has not ticked since it (re)started, or its strategy stopped it: "
+            "resume or step first"
+        )
+    return finite({"session": sid, "method": robot.method, "clock": frame.clock, **rec.to_dict()})
 
 
 def instructor_check(
@@ -295,5 +312,18 @@ def session_router(
         and ZMP, ZMP reference and bounds, planned feet, reference and optimised pelvic angle;
         lists of equal length, one per horizon sample."""
         return horizon_of(s[0], s[1], method)
+
+    @r.get("/qp", response_model=QpResponse, tags=["state"])
+    def get_qp(
+        method: str | None = Query(
+            None, description="fixed, redundancy or mpc (default: mpc if shown, else the first)"
+        ),
+        s: tuple[str, SessionView] = Session,
+    ) -> dict[str, Any]:
+        """What each of the robot's four optimisations did at the shown instant (the CoM MPC,
+        the pelvic MPC, the IK, the arm swing): status, iterations and time, the cost split
+        into its named terms, every active constraint by name with its multiplier, and what
+        the fallback did when a solve failed. Follows pause and seek like the horizon."""
+        return qp_of(s[0], s[1], method)
 
     return r

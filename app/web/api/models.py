@@ -266,6 +266,54 @@ class HorizonResponse(BaseModel):
     theta_deg: list[float]
 
 
+class QpConstraint(BaseModel):
+    """One active constraint of a layer's QP at its solution (controller.explain)."""
+
+    name: str = Field(description='what it is, in words: "left knee at its straight limit (0 deg)"')
+    kind: str = Field(description='"joint limit", "speed limit", "pinned", "ZMP bound", ...')
+    side: Literal["upper", "lower", "pinned"]
+    multiplier: float | None = Field(
+        description="|lambda|: how much the cost would fall per unit the bound were relaxed"
+    )
+    lam: float | None = Field(description="the Lagrange multiplier (> 0 upper, < 0 lower)")
+    bound: float | None = Field(description="the bound's value, in the row's unit")
+    row: int = Field(description="the row of the layer's QP")
+    joint: str | None = Field(description="the joint it holds (models.dyros_jet name), if any")
+    ahead_s: float | None = Field(description="[s] how far ahead in the horizon (MPC rows)")
+    axis: str | None = Field(description='"x" or "y" (the CoM MPC\'s ZMP rows)')
+
+
+class QpLayer(BaseModel):
+    """What one layer's optimisation did at the instant."""
+
+    layer: Literal["com_mpc", "pelvis_mpc", "ik", "arm_swing"]
+    title: str
+    ran: bool = Field(description="the layer solved a QP at this tick")
+    ok: bool = Field(description="solved (false: it failed and the fallback was used)")
+    status: str
+    iterations: int = Field(description="the solver's iterations (-1 unknown)")
+    solve_ms: float | None = Field(description="[ms] the solver's time")
+    objective: float | None = Field(description="the cost at the solution: the terms' sum")
+    qp_objective: float | None = Field(description="1/2 x'Px + q'x (the constants left out)")
+    terms: dict[str, float | None] = Field(description="the cost split into its named terms")
+    active: list[QpConstraint] = Field(description="the active constraints, largest first")
+    fallback: str = Field(description="what the layer did instead when the solve failed")
+    n_variables: int
+    n_constraints: int
+    note: str
+
+
+class QpResponse(BaseModel):
+    """The four layers' optimisations of one robot at the shown instant (issue 42)."""
+
+    session: str
+    method: str
+    clock: float = Field(description="session clock of the instant [s]")
+    t: float = Field(description="[s] the robot's time of the tick explained")
+    meaning: str = Field(description="what the active set means, in a sentence")
+    layers: list[QpLayer] = Field(description="CoM MPC, pelvic MPC, IK, arm swing")
+
+
 class RunStatus(BaseModel):
     id: str
     status: Literal["queued", "running", "done", "error"]
