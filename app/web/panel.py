@@ -36,6 +36,7 @@ from app.web.learn_gui import LearnTab
 from app.web.lessons import PRESETS, warnings_for
 from app.web.overlays import legend_html
 from app.web.plots import HorizonInspector, LivePlots
+from app.web.qp_view import QpView
 from app.web.record_gui import RecordFolder
 from app.web.scene import LAYERS, SLOW_STRATEGY_MS, fall_note
 from controller import strategy
@@ -121,6 +122,7 @@ class ControlPanel:
             self._build_controls()
         with tabs.add_tab("Inspect", viser.Icon.CHART_LINE):
             self.inspector = HorizonInspector(gui)
+            self.qp_view = QpView(gui, self.inspector.robot)
         with tabs.add_tab("Plots", viser.Icon.CHART_DOTS):
             self.plots = LivePlots(gui, view.session)
         with tabs.add_tab("Learn", viser.Icon.SCHOOL):
@@ -416,6 +418,7 @@ class ControlPanel:
                 self._update_timeline(playback)
             self.plots.update(frame, now)
             self.inspector.update(frame, now)
+            self.qp_view.update(frame, now)
             self.learn.update(frame, now)
 
     def _put(self, key: Any, handle: Any, value: Any) -> None:

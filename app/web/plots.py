@@ -265,7 +265,7 @@ class HorizonInspector:
             legend=LEGEND,
         )
         self.zmp = gui.add_uplot(
-            data=tuple(np.zeros(2, dtype=np.float32) for _ in range(6)),
+            data=tuple(np.zeros(2, dtype=np.float32) for _ in range(7)),
             title="Sideways (y) [m]: predicted ZMP and CoM in the ZMP bounds (eq. 16-18, 25-26)",
             series=(
                 x_axis,
@@ -274,6 +274,13 @@ class HorizonInspector:
                 viser.uplot.Series(label="ZMP reference", stroke=ref, width=1.5, dash=(6, 4)),
                 viser.uplot.Series(label="min", stroke=plan, width=1),
                 viser.uplot.Series(label="max", stroke=plan, width=1),
+                # the CoM MPC's active ZMP bounds (issue 42: the QP view names them)
+                viser.uplot.Series(
+                    label="bound touched (active)",
+                    stroke=css(DANGER),
+                    width=0,
+                    points=viser.uplot.Series_Points(show=True, size=9, fill=css(DANGER)),
+                ),
             ),
             aspect=2.0,
             axes=(HORIZON_X, viser.uplot.Axis()),
@@ -349,6 +356,7 @@ class HorizonInspector:
             h.zmp_ref[:, 1].astype(f32),
             h.zmp_lo[:, 1].astype(f32),
             h.zmp_hi[:, 1].astype(f32),
+            touched_y(r, h.zmp_lo[:, 1], h.zmp_hi[:, 1]).astype(f32),
         )
         deg = 180.0 / np.pi
         theta_ref, theta = h.theta_ref * deg, h.theta * deg
@@ -379,6 +387,21 @@ class HorizonInspector:
             f"**{METHOD_INFO[r.method].title}** at t = {frame.clock:.2f} s ({phase}, step "
             f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples.{stopped}"
         )
+
+
+def touched_y(r: Any, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(N,) the y bound the CoM MPC's ZMP touches at each horizon sample (its active
+    constraints, controller.explain), NaN where none is active: the strip's markers."""
+    out = np.full(len(lo), np.nan)
+    rec = getattr(r, "qp", None)
+    if rec is None:
+        return out
+    for c in rec["com_mpc"].active:
+        k = c.row - len(lo)  # the y rows follow the N x rows
+        if c.axis == "y":
+            if 0 <= k < len(lo):
+                out[k] = hi[k] if c.side == "upper" else lo[k]
+    return out
 
 
 def theta_note(r: Any, theta: np.ndarray, theta_ref: np.ndarray) -> str:

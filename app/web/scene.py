@@ -68,6 +68,7 @@ from app.web.overlays import (
     swing_path,
     vertex_colors,
 )
+from app.web.qp_marks import LimitMarks
 from app.web.robot_meshes import RobotMeshes
 from models.dyros_jet import FOOT_SIZE
 from pelvic_walk.core.methods import METHOD_INFO
@@ -157,6 +158,7 @@ class SceneView:
             )
         )
         self.ov["sticks"].handle.visible = False
+        self.limit_marks = LimitMarks(sc, model)  # joints the IK holds at a limit (issue 42)
         self.labels: list[Overlay] = []
         self._methods: tuple[str, ...] = ()
         self._overlay_time = self._label_time = -math.inf
@@ -303,6 +305,7 @@ class SceneView:
             if overlays:
                 self._overlay_time = now
                 self._draw_overlays(robots, y, kept)
+                self.limit_marks.draw(robots, y)
             if labels and self.layers["labels"]:
                 self._label_time = now
                 for r, yi, label in zip(robots, y, self.labels, strict=True):

@@ -1,0 +1,107 @@
+"""The QP view of the Inspect tab: what each of the selected robot's four optimisations did at
+the shown instant, side by side (issue 42; the record is :class:`controller.explain.TickExplain`,
+made with the frame, so it follows pause and scrub like the horizon inspector).
+
+Pure HTML from a frame (:func:`qp_html`, tested without a browser) and a small GUI holder
+(:class:`QpView`) that the panel updates with the inspector's chosen robot.
+"""
+
+from __future__ import annotations
+
+import html
+import math
+from typing import Any
+
+from controller.explain import ACTIVE_SET_MEANING, QpExplain, TickExplain
+from pelvic_walk.core.frames import LiveFrame, RobotFrame
+from pelvic_walk.core.methods import METHOD_INFO
+
+QP_VIEW_HZ = 4.0  # updates per second while running (paused: every shown frame)
+MAX_LISTED = 6  # active constraints listed per layer (the largest multipliers first)
+
+
+def _num(v: float) -> str:
+    if not math.isfinite(v):
+        return "–"
+    return f"{v:.3g}"
+
+
+def _layer_html(e: QpExplain) -> str:
+    esc = html.escape
+    head = f'<div style="font-weight:600">{esc(e.title)}</div>'
+    if not e.ran:
+        return (
+            f'<div data-layer="{e.layer}" data-active="0">{head}'
+            f'<div style="color:#666">{esc(e.note)}</div></div>'
+        )
+    if e.ok:
+        it = f", {e.iterations} it." if e.iterations >= 0 else ""
+        ms = f", {e.solve_ms:.3f} ms" if math.isfinite(e.solve_ms) else ""
+        status = f'<div style="color:#2a7a2a">solved{it}{ms}</div>'
+    else:
+        status = f'<div style="color:#b00020">failed ({esc(e.status)}): {esc(e.fallback)}</div>'
+    terms = "".join(f"<div>{esc(k)}: {_num(v)}</div>" for k, v in e.terms.items())
+    cost = f"<div>cost {_num(e.objective)}</div><div style='color:#555'>{terms}</div>"
+    if e.active:
+        items = "".join(
+            f'<li data-name="{esc(c.name)}">{esc(c.name)} '
+            f'<span style="color:#555">(λ {_num(c.multiplier)})</span></li>'
+            for c in e.active[:MAX_LISTED]
+        )
+        more = len(e.active) - MAX_LISTED
+        items += f"<li>… and {more} more</li>" if more > 0 else ""
+        active = (
+            f"<div>active ({len(e.active)}):</div>"
+            f'<ul style="margin:0;padding-left:1.1em">{items}</ul>'
+        )
+    else:
+        active = "<div>active: none (nothing stops it)</div>"
+    return (
+        f'<div data-layer="{e.layer}" data-active="{len(e.active)}">'
+        f"{head}{status}{cost}{active}</div>"
+    )
+
+
+def qp_html(r: RobotFrame | None, clock: float) -> str:
+    """The view of robot ``r``'s explanation at the session clock ``clock``."""
+    rec: TickExplain | None = r.qp if r is not None else None
+    if r is None or rec is None:
+        return (
+            '<div class="qp-view" data-t="">The QP view appears once the robot has ticked '
+            "(resume or step).</div>"
+        )
+    title = html.escape(METHOD_INFO[r.method].title) if r.method in METHOD_INFO else r.method
+    cols = "".join(_layer_html(e) for e in rec.layers)
+    return (
+        f'<div class="qp-view" data-t="{rec.t:.3f}" data-method="{html.escape(r.method)}" '
+        'style="font-size:12px;line-height:1.35">'
+        f"<div><b>What stops each optimisation</b>: {title} at t = {clock:.2f} s "
+        f"(its tick at {rec.t:.3f} s).</div>"
+        f'<div style="color:#444;margin:2px 0 6px">{html.escape(ACTIVE_SET_MEANING)}</div>'
+        '<div style="display:grid;grid-template-columns:repeat(auto-fit,minmax(150px,1fr));gap:8px">'
+        f"{cols}</div></div>"
+    )
+
+
+class QpView:
+    """The QP view's GUI element; :meth:`update` with each shown frame and the robot chosen
+    in the horizon inspector's dropdown."""
+
+    def __init__(self, gui: Any, robot: Any):
+        self.robot = robot  # the inspector's dropdown: one choice of robot for the tab
+        with gui.add_folder("QP: what stops each optimisation"):
+            self.html = gui.add_html(qp_html(None, 0.0))
+        self._key: tuple | None = None
+        self._time = -math.inf
+
+    def update(self, frame: LiveFrame, now: float) -> None:
+        r = frame.robot(self.robot.value)
+        key = (frame.seq, self.robot.value)
+        if key == self._key:
+            return
+        if not frame.paused and now - self._time < 1.0 / QP_VIEW_HZ:
+            return
+        self._key, self._time = key, now
+        content = qp_html(r, frame.clock)
+        if self.html.content != content:
+            self.html.content = content

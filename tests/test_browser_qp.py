@@ -1,0 +1,79 @@
+"""Real-browser test of the Inspect tab's QP view (issue 42): the four layers side by side for
+the chosen robot, following a seek while paused (the instant ``GET /api/qp`` explains).
+
+Screenshots go to ``tests/artifacts/`` (looked at by people; nothing asserts on pixels).
+"""
+
+from __future__ import annotations
+
+import pytest
+from browser_util import (
+    chromium,
+    get,
+    needs_chromium,
+    open_scene,
+    open_tab,
+    post,
+    put_params,
+    screenshot,
+    scroll_into_view,
+    wait_robots,
+    wait_until,
+)
+
+pytestmark = needs_chromium
+VIEWPORT = {"width": 1400, "height": 1000}
+
+
+@pytest.fixture(scope="module")
+def tool():
+    from browser_util import in_process
+
+    with in_process() as tool:
+        yield tool
+    assert tool.errors == [], tool.errors[:3]
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with chromium() as b:
+        yield b
+
+
+def test_the_qp_view_follows_a_seek(tool, browser):
+    base = tool.base
+    put_params(base, {"methods": ["fixed", "mpc"], "walk": {"step_length": 0.42}})
+    wait_robots(base, "the robots walking", lambda r: r["step_index"] >= 1, timeout=180)
+    page, scene = open_scene(browser, base + "/", VIEWPORT)
+    try:
+        open_tab(scene, "Inspect")
+        view = scene.locator(".qp-view[data-method]").first
+        view.wait_for(state="attached", timeout=120_000)
+        for layer in ("com_mpc", "pelvis_mpc", "ik", "arm_swing"):
+            assert scene.locator(f'.qp-view [data-layer="{layer}"]').count() == 1
+        assert "What stops each optimisation" in view.inner_text()
+        wait_until(
+            lambda: (k := get(base, "state")["kept"]) and k["end"] - k["start"] > 4.0,
+            "4 s of kept frames",
+            180,
+        )
+        post(base, "sim/pause")
+        kept = wait_until(lambda: (s := get(base, "state"))["paused"] and s["kept"], "the pause")
+        for i, target in enumerate((kept["end"] - 3.0, kept["end"] - 1.0)):
+            post(base, "sim/seek", {"t": target})
+            qp = get(base, "qp?method=mpc")
+            t = f"{qp['t']:.3f}"
+            wait_until(
+                lambda t=t: scene.locator(f'.qp-view[data-t="{t}"]').count() == 1,
+                f"the QP view to show the tick at {t} s",
+            )
+            ik = scene.locator('.qp-view [data-layer="ik"]').first
+            active = [c["name"] for c in qp["layers"][2]["active"]]
+            assert int(ik.get_attribute("data-active")) == len(active)
+            for name in active[:6]:
+                assert ik.locator(f'li[data-name="{name}"]').count() == 1
+            scroll_into_view(view)
+            screenshot(page, f"qp_view_seek_{i}.png")
+        post(base, "sim/resume")
+    finally:
+        page.context.close()
