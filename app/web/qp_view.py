@@ -78,7 +78,8 @@ def qp_html(r: RobotFrame | None, clock: float) -> str:
         f"<div><b>What stops each optimisation</b>: {title} at t = {clock:.2f} s "
         f"(its tick at {rec.t:.3f} s).</div>"
         f'<div style="color:#444;margin:2px 0 6px">{html.escape(ACTIVE_SET_MEANING)}</div>'
-        '<div style="display:grid;grid-template-columns:repeat(auto-fit,minmax(150px,1fr));gap:8px">'
+        '<div style="display:grid;gap:8px;'
+        'grid-template-columns:repeat(auto-fit,minmax(150px,1fr))">'
         f"{cols}</div></div>"
     )
 
