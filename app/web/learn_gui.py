@@ -69,6 +69,7 @@ COLUMNS = {  # row label of each live number (Lesson.numbers)
     "hip": "hip advance measured / eq. 2",
     "pushing": "push",
     "lateral": "CoM from the support centre (y)",
+    "active": "what stops the IK: its active limits now (most seen since the last change)",
 }
 
 
@@ -86,6 +87,7 @@ class _Tally:
         self.status: dict[str, int] = {}
         self.reach_max = 0.0
         self.kappa_max = 0.0
+        self.limits: dict[str, int] = {}  # the IK's active limits: frames each was seen in
 
     def add(self, r: RobotFrame) -> None:
         if r.waiting or r.finished:
@@ -98,6 +100,16 @@ class _Tally:
             self.reach_max = max(self.reach_max, float(np.max(r.reach)))
         if math.isfinite(r.kappa_legs):
             self.kappa_max = max(self.kappa_max, r.kappa_legs)
+        for name in ik_limits(r):
+            self.limits[name] = self.limits.get(name, 0) + 1
+
+
+def ik_limits(r: RobotFrame) -> list[str]:
+    """The IK's active constraints at the frame other than the waist's pin (a joint at its
+    angle or speed limit: what stops the legs; controller.explain)."""
+    if r.qp is None:
+        return []
+    return [c.name for c in r.qp["ik"].active if c.kind != "pinned"]
 
 
 class LessonRun:
@@ -418,6 +430,11 @@ class LearnTab:
             measured = abs(float(r.hips[0, 0] - r.hips[1, 0]))
             predicted = l_pel * abs(math.sin(r.waist_angle))
             return f"{1000 * measured:.0f} / {1000 * predicted:.0f} mm"
+        if key == "active":
+            now = ik_limits(r)
+            seen = sorted(tally.limits.items(), key=lambda kv: -kv[1])[:2]
+            most = "; ".join(f"{name} ×{n}" for name, n in seen)
+            return f"{'; '.join(now) or 'none'}" + (f" ({most})" if most else "")
         if key == "pushing":
             return "<b>pushing</b>" if r.pushing else "-"
         if key == "lateral":

@@ -128,9 +128,12 @@ LESSONS: tuple[Lesson, ...] = (
         f"{lesson_numbers.mpc_waist_deg(_PM):.0f}°): its kappa at landing stays near "
         f"{lesson_numbers.kappa_legs_at_landing('mpc', _PM):.0f} and its badge <i>clean</i>. "
         f"Our limits: fixed {_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
-        f"press the preset <i>{_EQ5:.2f} m (eq. 5)</i> and the fixed robot falls.",
+        f"press the preset <i>{_EQ5:.2f} m (eq. 5)</i> and the fixed robot falls. The row "
+        "<i>what stops the IK</i> names the constraint that gives way: the fixed robot's "
+        "knee at its <b>straight limit</b> (0°) while its waist rate stays pinned at 0; the "
+        "Inspect tab's QP view shows it with its multiplier, the four layers side by side.",
         ("4", "5", "45"),
-        ("status", "shares", "reach", "kappa_legs", "waist", "falls"),
+        ("status", "shares", "active", "reach", "kappa_legs", "waist", "falls"),
     ),
     Lesson(
         "2. What the prediction does",
@@ -217,9 +220,11 @@ LESSONS: tuple[Lesson, ...] = (
         f"step: it lies where it fell, ringed in red, for {FALL_HOLD_S:g} s while the MPC walks "
         f"on with much less than {_EQ4['theta']:.0f}°, then both restart together. Compare the "
         "measured hip "
-        "advance with eq. 2's l_pel sin(theta).",
+        "advance with eq. 2's l_pel sin(theta). Eq. 1-5 assume the leg is stretched straight at "
+        "the limit: the row <i>what stops the IK</i> shows where that happens on the robot, the "
+        "knee held at its straight limit (0°), and which robot reaches it.",
         ("2", "4", "5"),
-        ("step", "hip", "waist", "reach", "status", "falls"),
+        ("step", "hip", "waist", "reach", "active", "status", "falls"),
     ),
     Lesson(
         "7. A push: what the controller does",
