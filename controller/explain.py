@@ -140,7 +140,7 @@ class QpExplain:
 class TickExplain:
     """The four layers' explanations at one tick."""
 
-    t: float  # [s] the robot's time of the tick
+    t: float  # [s] the robot's time after the tick (as the series' ``t``)
     method: str
     layers: tuple[QpExplain, ...]  # in LAYER_NAMES order
 

@@ -75,7 +75,8 @@ def explain_tick(walker: Walker, out: TickOutput) -> TickExplain:
                 dt,
             )
         )
-    return TickExplain(float(out.t), p.method, tuple(layers))
+    # the time after the tick, as the time series' ``t`` and the frames' have it
+    return TickExplain(round(float(out.t) + dt, 9), p.method, tuple(layers))
 
 
 def _count(solver: QpSolver | None) -> float:

@@ -307,6 +307,50 @@ def arms_share(answer: Any, with_arms: pw.Run, without: pw.Run) -> bool | None:
     )
 
 
+def _constraint(name: str) -> str:
+    """A constraint's name without its side and value: "left knee at its straight limit
+    (0 deg)" -> "knee at its straight limit"."""
+    name = name.strip().lower().split(" (")[0].strip()
+    for side in ("left ", "right "):
+        if name.startswith(side):
+            name = name[len(side) :]
+    return name
+
+
+@_verdict
+def stops_the_fixed_pelvis(answer: Any, run: pw.Run) -> bool | None:
+    """The IK constraint that binds most often in ``run`` (the waist's pin aside), by name."""
+    if _unanswered(answer, 'one constraint\'s name, e.g. "hip roll at its upper limit"'):
+        return None
+    if not isinstance(answer, str):
+        print(
+            f"{NOT_YET} answer one constraint's name as a string (you passed a "
+            f"{type(answer).__name__}): read it in run.qp(t)['ik'].active"
+        )
+        return False
+    s = run.series
+    seen: dict[str, int] = {}
+    for t in s.loc[s["active_ik"] > 1, "t [s]"]:  # more than the waist's pin
+        for c in run.qp(float(t))["ik"].active:
+            if c.kind != "pinned":
+                seen[_constraint(c.name)] = seen.get(_constraint(c.name), 0) + 1
+    if not seen:
+        print(f"{NOT_YET} nothing but the waist's pin binds in this run: pass the 0.42 m walk")
+        return False
+    right = max(seen, key=lambda k: seen[k])
+    given = _constraint(answer)
+    if given == right:
+        print(f"{OK} right: the {right} (at {seen[right]} of the ticks where the IK is stopped)")
+        return True
+    if given.startswith("waist rate pinned"):
+        print(f"{NOT_YET} the pin is the fixed strategy's own rule, active every tick: what else?")
+    elif given in seen:
+        print(f"{NOT_YET} {given!r} binds too, but less often: which one binds most?")
+    else:
+        print(f"{NOT_YET} not yet. Hint: the names in run.qp(t)['ik'].active where active_ik > 1")
+    return False
+
+
 # -- 5 your own pelvis -----------------------------------------------------------------------
 @_verdict
 def clean_beside_mpc(mine: pw.Run, mpc: pw.Run) -> bool:

@@ -31,6 +31,9 @@ PANELS: dict[str, tuple[str, float, str, bool]] = {
     "com_y": ("com_y", 1.0, "CoM y, measured [m]", False),
     "zmp_y": ("cop_y", 1.0, "ZMP y (centre of pressure), measured [m]", False),
     "reach": ("reach_left", 1.0, "left hip-to-ankle / leg length (1 = straight)", False),
+    "active_ik": ("active_ik", 1.0, "active constraints of the IK (Run.qp names them)", False),
+    "active_pelvis_mpc": ("active_pelvis_mpc", 1.0, "active constraints of the pelvic MPC", False),
+    "active_com_mpc": ("active_com_mpc", 1.0, "active ZMP bounds of the CoM MPC", False),
 }
 DEFAULT_PANELS = ("waist", "waist_rate", "yaw_momentum", "kappa", "energy")
 STYLES = ("-", "--", ":", "-.")  # runs of the same method, told apart

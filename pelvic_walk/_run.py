@@ -154,7 +154,9 @@ class Run:
 
     def qp(self, t: float) -> TickExplain:
         """What each layer's optimisation did at time ``t`` [s] (the nearest recorded
-        instant, 20 a second; ``.t`` is its time): for the CoM MPC, the pelvic MPC, the IK
+        instant: 20 a second, and every tick at which a layer's count of active constraints
+        changed, so the instant a bound starts binding is exact; ``.t`` is its time): for the
+        CoM MPC, the pelvic MPC, the IK
         and the arm swing (``rec["ik"]``), the solver's status, iterations and time, the cost
         split into its named terms (``.terms``, adding up to ``.objective``), every active
         constraint by name with its multiplier (``.active``, ``.names()``), and what the
@@ -163,17 +165,16 @@ class Run:
         t = float(t)
         if not math.isfinite(t):
             raise ValueError(f"t must be a finite time [s], got {t}")
-        frames = [f for f in self._frames if f.robots[0].qp is not None]
-        if not frames:
+        recs = [f.robots[0].qp for f in self._frames if f.robots[0].qp is not None]
+        recs = sorted([*recs, *self._capture.qp_records], key=lambda r: r.t)
+        if not recs:
             raise ValueError("the run recorded no QP (it stopped before its first tick)")
-        times = np.array([f.robots[0].t for f in frames])
+        times = np.array([r.t for r in recs])
         if t < times[0] - 0.05 or t > times[-1] + 0.05:
             raise ValueError(
                 f"t = {t:g} s is outside the run ({times[0]:.2f} to {times[-1]:.2f} s)"
             )
-        rec = frames[int(np.argmin(np.abs(times - t)))].robots[0].qp
-        assert rec is not None
-        return rec
+        return recs[int(np.argmin(np.abs(times - t)))]
 
     @property
     def command(self) -> str:

@@ -142,6 +142,27 @@ def test_checks_of_runs_read_the_runs(capsys):
     capsys.readouterr()
 
 
+def test_the_check_of_what_stops_the_fixed_pelvis_wants_a_name(capsys):
+    import pelvic_walk as pw
+
+    checks = _checks()
+    fixed = pw.simulate("fixed", step_length=0.42, steps=3)
+    s = fixed.series
+    rec = fixed.qp(float(s.loc[s["active_ik"] > 1, "t [s]"].iloc[-1]))
+    assert checks.stops_the_fixed_pelvis(..., fixed).ok is None
+    assert checks.stops_the_fixed_pelvis("knee at its straight limit", fixed).ok is True
+    assert checks.stops_the_fixed_pelvis("Right knee at its straight limit (0 deg)", fixed).ok
+    # the reference's answer passed in (the record, its names, their text) does not pass
+    for given in (rec, rec["ik"], rec["ik"].names(), str(rec["ik"].names()), rec["ik"].active):
+        assert checks.stops_the_fixed_pelvis(given, fixed).ok is False, given
+    assert checks.stops_the_fixed_pelvis("waist rate pinned by the strategy", fixed).ok is False
+    assert checks.stops_the_fixed_pelvis("knee at its speed limit", fixed).ok is False
+    walk = pw.simulate("mpc", step_length=0.3, steps=2)  # nothing but the pin binds
+    assert checks.stops_the_fixed_pelvis("knee at its straight limit", walk).ok is False
+    out = capsys.readouterr().out
+    assert "binds too, but less often" in out and "as a string" in out
+
+
 def test_checks_of_a_stopped_strategy():
     import pelvic_walk as pw
     from controller import strategy

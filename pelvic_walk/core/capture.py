@@ -9,8 +9,12 @@ into a recording's page is a face's job (``app.web.recording``).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
+from controller.explain import TickExplain
+from controller.tick_explain import active_counts, explain_tick
 from pelvic_walk.core.frames import (
     HISTORY_DECIMATION,
     ROW_COLUMNS,
@@ -34,6 +38,11 @@ class Capture:
         self._rows: list[np.ndarray] = []
         self._ticks = 0
         self._energy = TwoStepEnergy()
+        # the layers' explanations (controller.explain) at every tick whose counts of active
+        # constraints changed, beside the frames' (``Run.qp``): the instant a bound starts or
+        # stops binding is kept exactly, for the price of four counts a tick
+        self.qp_records: list[TickExplain] = []
+        self._counts: tuple[int, ...] = ()
 
     @property
     def rows(self) -> np.ndarray:
@@ -44,6 +53,11 @@ class Capture:
         """After every control tick of ``session``."""
         self._ticks += 1
         t = float(session.t)
+        if session.last is not None and session.error is None:
+            counts = tuple(-1 if math.isnan(c) else int(c) for c in active_counts(session.walker))
+            if counts != self._counts:
+                self._counts = counts
+                self.qp_records.append(explain_tick(session.walker, session.last))
         if self._ticks % HISTORY_DECIMATION == 0:
             row = plot_row(session, t, self._energy(session))
             if row is not None:
