@@ -327,7 +327,9 @@ class ComMpc:
             axis, k = ("x", row) if row < N else ("y", row - N)
             side = side_of(lam, False)
             ahead = round((k + 1) * T, 6)
-            z = float((plan.zmp_hi if side == "upper" else plan.zmp_lo)[k, 0 if axis == "x" else 1])
+            bounds = plan.zmp_hi if side == "upper" else plan.zmp_lo
+            assert bounds is not None  # the bound in metres (the QP's row has Pzs x0 taken off)
+            z = float(bounds[k, 0 if axis == "x" else 1])
             return ActiveConstraint(
                 f"ZMP {axis} {side} bound at {ahead_text(ahead)} ({_EDGE[axis, side]} edge "
                 "of the support)",
