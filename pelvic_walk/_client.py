@@ -225,6 +225,12 @@ class Client:
         query = {"method": method} if method else None
         return self._json("GET", self._live("horizon"), params=query)
 
+    def qp(self, method: str | None = None) -> dict[str, Any]:
+        """What one robot's four optimisations did at the shown instant (``GET /api/qp``):
+        cost terms, active constraints by name with their multipliers."""
+        query = {"method": method} if method else None
+        return self._json("GET", self._live("qp"), params=query)
+
     def recording(self, seconds: float = 10.0, format: str = "zip") -> bytes:
         """The last ``seconds`` as a file that plays back without the server: ``zip``,
         ``html`` (the scene), ``csv`` or ``png``."""
