@@ -36,7 +36,7 @@ def _layer_html(e: QpExplain) -> str:
         )
     if e.ok:
         it = f", {e.iterations} it." if e.iterations >= 0 else ""
-        ms = f", {e.solve_ms:.3f} ms" if math.isfinite(e.solve_ms) else ""
+        ms = f", {1e3 * e.solve_ms:.0f} µs" if math.isfinite(e.solve_ms) else ""
         status = f'<div style="color:#2a7a2a">solved{it}{ms}</div>'
     else:
         status = f'<div style="color:#b00020">failed ({esc(e.status)}): {esc(e.fallback)}</div>'
@@ -75,8 +75,8 @@ def qp_html(r: RobotFrame | None, clock: float) -> str:
     return (
         f'<div class="qp-view" data-t="{rec.t:.3f}" data-method="{html.escape(r.method)}" '
         'style="font-size:12px;line-height:1.35">'
-        f"<div><b>What stops each optimisation</b>: {title} at t = {clock:.2f} s "
-        f"(its tick at {rec.t:.3f} s).</div>"
+        f"<div><b>What stops each optimisation</b>: {title}, the tick ending at t = "
+        f"{rec.t:.3f} s of its walk (session clock {clock:.2f} s).</div>"
         f'<div style="color:#444;margin:2px 0 6px">{html.escape(ACTIVE_SET_MEANING)}</div>'
         '<div style="display:grid;gap:8px;'
         'grid-template-columns:repeat(auto-fit,minmax(150px,1fr))">'
