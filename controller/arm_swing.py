@@ -151,7 +151,8 @@ def explain_arm(
             row, ARM_QP_JOINTS[row], lam, bound, qd_max, (float(q_min[row]), float(q_max[row]))
         )
 
+    constant = 0.5 * w1 * h_low**2 + 0.5 * w2 * float(r @ r)
     return explain_qp(
         "arm_swing", qp, x, res.ok, res.status, solver, terms, name,
-        "held the arms: zero arm velocities this tick",
+        "held the arms: zero arm velocities this tick", constant,
     )  # fmt: skip

@@ -322,6 +322,10 @@ class ComMpc:
             "velocity fluctuation (beta)": 0.5 * p.beta * float(np.sum(dV**2)),
             "jerk (gamma)": 0.5 * p.gamma * float(np.sum(U**2)),
         }
+        # the terms with zero jerk less their linear part: what the QP leaves out
+        z0 = self.zmp_from_state @ x0 - plan.zmp_ref
+        v0 = self.dvel_from_state @ x0
+        constant = 0.5 * p.alpha * float(np.sum(z0**2)) + 0.5 * p.beta * float(np.sum(v0**2))
 
         def name(row: int, lam: float, bound: float) -> ActiveConstraint:
             axis, k = ("x", row) if row < N else ("y", row - N)
@@ -346,4 +350,5 @@ class ComMpc:
             terms,
             name,
             "the previous optimal jerks, shifted by the time since they were computed",
+            constant,
         )

@@ -234,13 +234,15 @@ def explain_qp(
     terms: dict[str, float],
     name_row: Callable[[int, float, float], ActiveConstraint],
     fallback: str,
+    constant: float,
     note: str = "",
 ) -> QpExplain:
     """The explanation of one solve: ``terms`` (named cost terms at ``x``, constants
-    included), each active row named by ``name_row(row, lam, bound)``."""
+    included; ``constant``: their part the QP leaves out, computed by the layer from its own
+    data, so ``sum(terms) - constant == 1/2 x'Px + q'x`` checks the split), each active row
+    named by ``name_row(row, lam, bound)``."""
     iterations, solve_ms = solver_stats(solver, qp)
     objective = float(sum(terms.values()))
-    qp_obj = float(0.5 * x @ qp.P @ x + qp.q @ x)
     active: Sequence[ActiveConstraint] = ()
     if ok:
         rows, lam = multipliers(qp, x, solver)
@@ -258,7 +260,7 @@ def explain_qp(
         iterations,
         solve_ms,
         objective,
-        objective - qp_obj,
+        float(constant),
         terms,
         tuple(active),
         "" if ok else fallback,

@@ -202,6 +202,7 @@ def explain_ik(
         terms,
         name,
         "held the last command: zero joint velocities this tick",
+        0.5 * float(v @ v) + (0.5 * w * q_waist**2 if free else 0.0),
     )
 
 

@@ -242,6 +242,9 @@ class PelvisMpc:
             * float(np.sum((plan.angles - plan.reference) ** 2)),
             "yaw acceleration (beta)": 0.5 * b * float(np.sum(plan.acc**2)),
         }
+        # U = M (Theta - f): M f = M Theta - U; the QP leaves out alpha/2 |ref|^2 + beta/2 |M f|^2
+        mf = self._M @ plan.angles - plan.acc
+        constant = 0.5 * a * float(plan.reference @ plan.reference) + 0.5 * b * float(mf @ mf)
         limit_deg = self.params.angle_limit_deg
         acc = self.params.acc_limit
 
@@ -273,4 +276,5 @@ class PelvisMpc:
             terms,
             name,
             "a brake: the waist rate brought to 0 at the acceleration bound",
+            constant,
         )

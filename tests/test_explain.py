@@ -91,8 +91,10 @@ def _terms_add_up(e):
 
 
 def test_cost_terms_add_up_to_each_layers_objective():
-    """Every layer: the named terms sum to the objective, and the objective less its
-    constant is the QP's 1/2 x'Px + q'x at the solution (computed here from the QP)."""
+    """Every layer: the named terms (each computed from its definition in the paper) sum to
+    the objective, and the objective less the constants the layer computes from its own data
+    is the QP's 1/2 x'Px + q'x at the solution (computed here from the QP): the split is the
+    QP's cost."""
     p = ControllerParams().replace(method="mpc", walk=dict(step_length=0.3, n_steps=2))
     s = Session(RunConfig(params=p))
     w = s.walker
@@ -135,6 +137,10 @@ def test_the_fixed_pelvis_at_0_42_m_is_stopped_by_a_straight_knee():
         if active_counts(s.walker)[2] > 1:  # cheap: something beyond the waist's pin
             rec = explain_tick(s.walker, out)
             names.update(rec["ik"].names())
+            ik, qp = rec["ik"], s.walker.ik_solver.last_qp
+            x = s.walker.ik_solver.last_result.x
+            _terms_add_up(ik)  # and the split holds with a knee near straight (J ill-conditioned)
+            assert ik.qp_objective == pytest.approx(0.5 * x @ qp.P @ x + qp.q @ x, abs=1e-9)
             assert not rec["pelvis_mpc"].ran and "pins the waist" in rec["pelvis_mpc"].note
     assert {
         "right knee at its straight limit (0 deg)",
