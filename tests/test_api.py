@@ -11,6 +11,7 @@ from fastapi.testclient import TestClient
 
 from app.live import LiveSim
 from app.runs import SUMMARY_KEYS
+from app.web.addresses import ClientAddresses
 from app.web.api import create_app
 from controller.params import ControllerParams
 
@@ -290,20 +291,26 @@ def test_pages(client):
 
 
 def test_run_manager_is_bounded():
-    """More than max_pending queued runs are refused (429 at the API), old records pruned."""
+    """More than per_client runs of one client, or max_pending of all, are refused (429 at the
+    API); the instructor (client None) is beyond both; old records pruned."""
     import threading
 
     from app.web.api.runs import RunBusy, RunManager
     from controller.params import ControllerParams
 
     params = ControllerParams()
-    manager = RunManager(max_pending=2, keep=3)
+    manager = RunManager(max_pending=3, keep=3, per_client=2)
     release = threading.Event()
     manager._work = lambda *_: release.wait(30)  # hold the worker: the runs stay pending
-    manager.submit(params, None)
-    manager.submit(params, None)
-    with pytest.raises(RunBusy):
-        manager.submit(params, None)
+    manager.submit(params, None, "a")
+    manager.submit(params, None, "a")
+    with pytest.raises(RunBusy, match="you have 2 headless runs"):
+        manager.submit(params, None, "a")
+    manager.submit(params, None, "b")  # a's share is full, not b's
+    with pytest.raises(RunBusy, match="clients have 3 headless runs"):
+        manager.submit(params, None, "c")
+    manager.submit(params, None, None)  # the instructor
+    assert "_client" not in str(manager.get(manager.submit(params, None, None)))
     release.set()
     manager.shutdown()
 
@@ -311,7 +318,7 @@ def test_run_manager_is_bounded():
     manager._work = lambda *_: None
     for i in range(5):  # finished records beyond `keep` are pruned on the next submit
         manager._runs[f"done{i}"] = {"id": f"done{i}", "status": "done"}
-    manager.submit(params, None)
+    manager.submit(params, None, "a")
     assert len(manager._runs) == 3
     manager.shutdown()
 
@@ -797,3 +804,50 @@ def test_sessions_are_listed_and_addressed(client):
     assert client.get("/api/state", headers={"X-Pelvic-Session": "nope"}).status_code == 404
     assert client.post("/api/sessions").status_code == 409  # shared mode
     assert client.delete("/api/sessions/shared").status_code == 409
+
+
+def test_one_client_cannot_fill_everyones_run_queue(live):
+    """Four anonymous POST /api/runs from one address filled the shared queue and everyone got
+    429. Now: that address's share is full (429 with Retry-After and a line to act on, the
+    same line for every refused client), another address and the instructor still get 202;
+    a credential the server never gave makes no new client; a forwarded header from an
+    untrusted peer is ignored, from the trusted proxy it names the client."""
+    import threading
+
+    from app.web.api.runs import RunManager
+    from app.web.auth import Instructor
+
+    runs = RunManager(per_client=2, max_pending=8)
+    release = threading.Event()
+    runs._work = lambda *_: release.wait(60)  # the runs stay queued
+    body = {"method": "fixed", "walk": {"step_length": 0.2, "n_steps": 1}}
+    app = create_app(live, runs=runs, instructor=Instructor(TOKEN))
+    addresses = ClientAddresses("10.9.0.1")  # a proxy that no request below comes through
+    app2 = create_app(live, runs=runs, instructor=Instructor(TOKEN), addresses=addresses)
+    try:
+        student = TestClient(app, client=("192.0.2.10", 5000))
+        other = TestClient(app, client=("192.0.2.11", 5000))
+        assert [student.post("/api/runs", json=body).status_code for _ in range(2)] == [202] * 2
+        refused = [
+            student.post("/api/runs", json=body),
+            student.post("/api/runs", json=body, headers={"Authorization": "Bearer made-up"}),
+            student.post("/api/runs", json=body, headers={"X-Forwarded-For": "198.51.100.7"}),
+        ]
+        for r in refused:
+            assert r.status_code == 429, r.text
+            assert r.headers["retry-after"] == "10"
+            assert r.json()["detail"].startswith("you have 2 headless runs queued or running")
+        assert other.post("/api/runs", json=body).status_code == 202
+        teacher = {"Authorization": f"Bearer {TOKEN}"}
+        assert [
+            student.post("/api/runs", json=body, headers=teacher).status_code for _ in range(3)
+        ] == [202] * 3
+        # behind the trusted proxy each forwarded client has its own share
+        proxy = TestClient(app2, client=("10.9.0.1", 5000))
+        for ip in ("198.51.100.1", "198.51.100.2"):
+            fwd = {"X-Forwarded-For": f"203.0.113.99, {ip}"}  # the client's own claim, then ours
+            codes = [proxy.post("/api/runs", json=body, headers=fwd).status_code for _ in range(3)]
+            assert codes == [202, 202, 429], (ip, codes)
+    finally:
+        release.set()
+        runs.shutdown()

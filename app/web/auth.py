@@ -133,8 +133,18 @@ def client_seat(server: Any, client: Any) -> str | None:
         return None
 
 
+def client_headers(server: Any, client: Any) -> Any:
+    """The HTTP headers of a viser client's websocket request, or None."""
+    try:
+        return _connection(server, client).request.headers
+    except AttributeError:
+        return None
+
+
 def client_address(server: Any, client: Any) -> str | None:
-    """The network address a viser client connected from, or None."""
+    """The network address a viser client's socket connected from (the peer: behind a
+    proxy, the proxy's; :class:`app.web.addresses.ClientAddresses` reads the client's), or
+    None."""
     try:
         return str(_connection(server, client).remote_address[0])
     except (AttributeError, IndexError, TypeError):

@@ -36,7 +36,8 @@ import mujoco
 from app.live.pool import PoolFull
 from app.live.registry import AddressFull, SessionRegistry, usable_credential
 from app.live.session import SessionView
-from app.web.auth import Instructor, client_address, client_seat, client_token
+from app.web.addresses import ClientAddresses
+from app.web.auth import Instructor, client_address, client_headers, client_seat, client_token
 from app.web.panel import ControlPanel
 from app.web.scene import SceneView
 from models.dyros_jet import SCENE_XML
@@ -137,10 +138,12 @@ class Display:
         registry: SessionRegistry,
         hz: float = DISPLAY_HZ,
         instructor: Instructor | None = None,
+        addresses: ClientAddresses | None = None,
     ):
         self.server = server
         self.registry = registry
         self.instructor = instructor or Instructor(None)
+        self.addresses = addresses or ClientAddresses()  # the API's source too
         self.period = 1.0 / hz
         self.hz = hz
         self._lock = threading.Lock()
@@ -170,7 +173,9 @@ class Display:
                     notice = "**Instructor**: you drive the shared demo every student watches."
             else:
                 seat = usable_credential(client_seat(self.server, client))
-                address = client_address(self.server, client)
+                address = self.addresses.resolve(
+                    client_address(self.server, client), client_headers(self.server, client)
+                )
                 try:
                     if self._in_line() and (seat is None or registry.owned([seat]) is None):
                         raise PoolFull("browsers wait in line for room")  # first come first

@@ -31,6 +31,7 @@ from app.live.registry import (
     SessionsDisabled,
 )
 from app.live.session import SessionView
+from app.web.addresses import ClientAddresses
 from app.web.api.edges import conflict, finite, router
 from app.web.auth import BEARER, SEAT_COOKIE, Instructor, new_credential
 
@@ -50,8 +51,10 @@ class Caller:
     address: str | None
 
 
-def caller_of(instructor: Instructor):
-    """A FastAPI dependency: the :class:`Caller` of a request."""
+def caller_of(instructor: Instructor, addresses: ClientAddresses | None = None):
+    """A FastAPI dependency: the :class:`Caller` of a request (its address read by
+    ``addresses``, the one source the scene's connections are read by too)."""
+    source = addresses or ClientAddresses()
 
     def caller(
         request: Request, credentials: HTTPAuthorizationCredentials | None = Bearer
@@ -61,7 +64,7 @@ def caller_of(instructor: Instructor):
         return Caller(
             instructor=instructor.is_token(bearer),
             credentials=tuple(c for c in (bearer, seat) if c),
-            address=request.client.host if request.client is not None else None,
+            address=source.of_request(request),
         )
 
     return caller

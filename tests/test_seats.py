@@ -1,0 +1,152 @@
+"""One address source for every seat (app/web/addresses.py): the page, the API and the 3-D
+scene's websocket connections count a client by the same address, behind a reverse proxy too
+(forwarded headers trusted only from the configured proxy).
+
+Before, the API took the address uvicorn gave it (which read X-Forwarded-For from 127.0.0.1)
+and the scene the socket's: behind a proxy on this machine every scene connection was the
+proxy's loopback address, which is not limited, so scene-only connections each got a private
+session.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import threading
+
+import httpx
+import pytest
+import websockets
+from viser import __version__ as viser_version
+
+from app.local_server import local_server
+from app.web.addresses import ClientAddresses, parse_trusted
+
+WAIT_S = 90.0
+HTTP_S = 60.0
+
+
+# -- the resolver ----------------------------------------------------------------------------
+def test_forwarded_headers_count_only_from_a_trusted_proxy():
+    direct = ClientAddresses()
+    assert direct.resolve("192.0.2.1", {"X-Forwarded-For": "198.51.100.9"}) == "192.0.2.1"
+    assert direct.resolve("::ffff:192.0.2.1", {}) == "192.0.2.1"  # one spelling of one address
+    behind = ClientAddresses("127.0.0.1, 10.0.0.0/8")
+    fwd = {"x-forwarded-for": "203.0.113.5"}
+    assert behind.resolve("127.0.0.1", fwd) == "203.0.113.5"
+    assert behind.resolve("10.1.2.3", fwd) == "203.0.113.5"
+    assert behind.resolve("192.0.2.1", fwd) == "192.0.2.1"  # not a proxy of ours: ignored
+    # read from the right: what the client wrote itself (the left) is not believed
+    assert behind.resolve("127.0.0.1", {"X-Forwarded-For": "1.1.1.1, 203.0.113.5"}) == (
+        "203.0.113.5"
+    )
+    # a chain of our proxies: the nearest address that is not one of them
+    assert behind.resolve("127.0.0.1", {"X-Forwarded-For": "203.0.113.5, 10.0.0.2"}) == (
+        "203.0.113.5"
+    )
+    # garbage in the header: the last good hop (the proxy), never the garbage
+    assert behind.resolve("127.0.0.1", {"X-Forwarded-For": "not-an-ip"}) == "127.0.0.1"
+    assert behind.resolve("127.0.0.1", {}) == "127.0.0.1"
+    assert behind.resolve(None, fwd) is None
+    with pytest.raises(ValueError, match="not an IP address or network: 'proxy.local'"):
+        parse_trusted("127.0.0.1, proxy.local")
+
+
+def test_a_bad_trusted_proxy_stops_serve_with_one_line(capsys):
+    from app.cli import main
+
+    assert main(["serve", "--trusted-proxy", "nonsense", "--port", "1", "--viser-port", "2"]) == 2
+    err = capsys.readouterr().err
+    assert "--trusted-proxies" in err and "nonsense" in err and "Traceback" not in err
+
+
+# -- served: the scene and the API behind a proxy at 127.0.0.1 ---------------------------------
+@pytest.fixture(scope="module")
+def behind_proxy():
+    """Private mode, one worker of three robots: the demo's one robot and two private
+    sessions of one; 127.0.0.1 (where the proxy runs) is the trusted proxy."""
+    args = ("--sessions", "private", "--workers", "1", "--robots-per-worker", "3")
+    with local_server((*args, "--methods", "mpc", "--trusted-proxy", "127.0.0.1")) as server:
+        yield server
+
+
+class Scene:
+    """A scene connection as a proxy forwards it: from 127.0.0.1, with X-Forwarded-For."""
+
+    def __init__(self, url: str, forwarded_for: str):
+        self.url, self.headers = url, {"X-Forwarded-For": forwarded_for}
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=lambda: asyncio.run(self._run()), daemon=True)
+        self._thread.start()
+
+    async def _run(self) -> None:
+        from test_private_scene import camera_message  # (tests/ is on the path)
+
+        async with websockets.connect(
+            self.url,
+            subprotocols=[f"viser-v{viser_version}"],  # type: ignore[list-item]
+            additional_headers=self.headers,
+            max_size=None,
+            open_timeout=60,
+        ) as ws:
+            await ws.send(camera_message())
+            while not self._stop.is_set():
+                with contextlib.suppress(TimeoutError):
+                    await asyncio.wait_for(ws.recv(), timeout=0.3)
+
+    def close(self) -> None:
+        self._stop.set()
+        self._thread.join(30)
+
+
+def _wait(check, what: str):
+    import time
+
+    deadline = time.monotonic() + WAIT_S
+    while time.monotonic() < deadline:
+        value = check()
+        if value:
+            return value
+        time.sleep(0.25)
+    pytest.fail(f"waited {WAIT_S:.0f} s for {what}")
+
+
+def test_the_scene_and_the_api_count_one_client_by_one_address_behind_a_proxy(behind_proxy):
+    base, ws = behind_proxy.base, f"ws://127.0.0.1:{behind_proxy.viser_port}/"
+
+    def health() -> dict:
+        return httpx.get(f"{base}/api/health", timeout=HTTP_S).json()
+
+    def private() -> int:
+        return httpx.get(f"{base}/api/sessions", timeout=HTTP_S).json()["private_sessions"]
+
+    scenes = [Scene(ws, "198.51.100.5")]
+    try:
+        _wait(lambda: private() == 1, "the first client's scene to get its session")
+        # the same client's second scene-only connection (no cookie): its address holds its
+        # one session, so it waits (before: the proxy's 127.0.0.1, unlimited, got another)
+        scenes.append(Scene(ws, "198.51.100.5"))
+        _wait(lambda: health()["viewers_waiting"] == 1, "the second connection to wait")
+        assert private() == 1
+        # the API reads the same address: that client may not open one by script either
+        fwd = {"X-Forwarded-For": "198.51.100.5"}
+        r = httpx.post(f"{base}/api/sessions", headers=fwd, timeout=HTTP_S)
+        assert r.status_code == 429, r.text
+        assert "holds 1 private session" in r.json()["detail"] and "198.51.100.5" in r.text
+        # a client behind the proxy that writes its own X-Forwarded-For is read from the
+        # right: the proxy appends the address it saw, which is what counts
+        spoof = {"X-Forwarded-For": "203.0.113.1, 198.51.100.5"}
+        assert httpx.post(f"{base}/api/sessions", headers=spoof, timeout=HTTP_S).status_code == 429
+        # another client behind the same proxy is another address
+        other = {"X-Forwarded-For": "198.51.100.6"}
+        r = httpx.post(f"{base}/api/sessions", headers=other, timeout=HTTP_S)
+        assert r.status_code == 201, r.text
+        httpx.delete(
+            f"{base}/api/sessions/mine",
+            headers={"Authorization": f"Bearer {r.json()['token']}"},
+            timeout=HTTP_S,
+        )
+    finally:
+        for s in scenes:
+            s.close()
+    assert "Traceback" not in behind_proxy.output(400)
