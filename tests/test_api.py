@@ -531,23 +531,43 @@ def test_with_an_instructor_anyone_reads(taught):
     assert "That instructor token is wrong" in taught.get("/?token=guess").text
 
 
-def test_the_instructors_page_carries_the_token_to_the_scene(taught):
-    from urllib.parse import parse_qs, quote, unquote, urlsplit
+def test_the_instructors_token_is_exchanged_once_for_an_httponly_cookie(live):
+    """/?token=T answers 303 to / with the instructor cookie (HttpOnly, SameSite=Strict): the
+    token is in no frame's address, no page, no redirect; the cookie then makes the page the
+    instructor's and changes the shared session through the API; a made-up cookie, the token
+    as the cookie or a wrong token do not."""
+    from app.web.auth import INSTRUCTOR_COOKIE, Instructor
 
-    page = taught.get(f"/?token={TOKEN}").text
-    assert "you drive the shared demo" in page
-    src = page.split('<iframe id="scene" src="', 1)[1].split('"', 1)[0]
-    websocket = parse_qs(urlsplit(src.replace("&amp;", "&")).query)["websocket"][0]
-    assert websocket.startswith("ws://") and parse_qs(urlsplit(unquote(websocket)).query) == {
-        "token": [TOKEN]
-    }
-    # only the scene's frame carries it: no link on the projected page, and the page takes
-    # it out of its address bar once read
-    rest = page.replace(src, "")
-    assert TOKEN not in rest and quote(TOKEN, safe="") not in rest
-    link = page.split("Scene in its own tab", 1)[0].rsplit('href="', 1)[1].split('"', 1)[0]
-    assert "token" not in link and "websocket" not in link
-    assert 'searchParams.delete("token")' in page and "history.replaceState" in page
+    app = create_app(live, viser_port=18765, instructor=Instructor(TOKEN))
+    with TestClient(app, follow_redirects=False) as browser:
+        r = browser.get(f"/?token={TOKEN}&lang=en")
+        assert r.status_code == 303 and r.headers["location"] == "/?lang=en"
+        set_cookie = r.headers["set-cookie"]
+        assert set_cookie.startswith(f"{INSTRUCTOR_COOKIE}=") and "HttpOnly" in set_cookie
+        assert "samesite=strict" in set_cookie.lower() and "max-age" not in set_cookie.lower()
+        assert TOKEN not in r.text + str(r.headers)
+        cookie = browser.cookies.get(INSTRUCTOR_COOKIE)
+        assert cookie and cookie != TOKEN
+        page = browser.get("/").text
+        assert "you drive the shared demo" in page
+        src = page.split('<iframe id="scene" src="', 1)[1].split('"', 1)[0]
+        assert src == "http://testserver:18765/"  # no token, no websocket address
+        assert TOKEN not in page and cookie not in page
+        # the cookie is the instructor's credential at the API too
+        assert browser.post("/api/sim/pause").status_code == 200
+        assert browser.post("/api/sim/resume").status_code == 200
+    for forged in ("made-up", TOKEN, ""):
+        with TestClient(app, cookies={INSTRUCTOR_COOKIE: forged}) as student:
+            assert "The <b>instructor</b> drives the shared demo" in student.get("/").text
+            assert student.post("/api/sim/pause").status_code == 401
+    with TestClient(app, follow_redirects=False) as guess:
+        r = guess.get("/?token=guess")
+        assert r.status_code == 303 and r.headers["location"] == "/?token_wrong=1"
+        assert INSTRUCTOR_COOKIE not in r.headers.get("set-cookie", "") and "guess" not in str(
+            r.headers
+        )
+        assert "That instructor token is wrong" in guess.get("/?token_wrong=1").text
+    app.state.runs.shutdown()
 
 
 def test_the_token_is_compared_in_constant_time(monkeypatch):
@@ -596,8 +616,8 @@ def test_a_served_tool_never_logs_the_token(tmp_path):
     env = {**os.environ, "PELVIC_WALK_INSTRUCTOR_TOKEN": TOKEN, "PELVIC_WALK_DISPLAY_NICE": "0"}
     with local_server(("--workers", "0"), env=env) as server:
         base = server.base
-        assert httpx.get(f"{base}/?token={TOKEN}", timeout=30).status_code == 200
-        assert httpx.get(f"{base}/?token={TOKEN}x", timeout=30).status_code == 200
+        assert httpx.get(f"{base}/?token={TOKEN}", timeout=30).status_code == 303
+        assert httpx.get(f"{base}/?token={TOKEN}x", timeout=30).status_code == 303
         auth = {"Authorization": f"Bearer {TOKEN}"}
         assert httpx.post(f"{base}/api/sim/pause", headers=auth, timeout=30).status_code == 200
         bad = {"Authorization": f"Bearer {TOKEN}x"}

@@ -3,8 +3,9 @@
 - In ``shared`` mode there is one view on the viser server itself: every browser sees the same
   scene and GUI, and every control acts on the shared session.
 - With an instructor (``serve --instructor-token``), each browser gets its own view of the
-  shared session (viser's per-client scene and GUI): the instructor's (the page opened with
-  ``?token=``) drives it, the students' are read-only, with a line saying so.
+  shared session (viser's per-client scene and GUI): the instructor's (its instructor cookie,
+  given for the page opened once with ``?token=``) drives it, the students' are read-only,
+  with a line saying so.
 - In ``private`` mode each browser gets its own view (viser's per-client scene and GUI) on its
   own session. A browser that brings its page's seat cookie (:func:`app.web.auth.client_seat`)
   gets the session that cookie holds, opened at its first connection and found again on a
@@ -37,7 +38,13 @@ from app.live.pool import PoolFull
 from app.live.registry import AddressFull, SessionRegistry, usable_credential
 from app.live.session import SessionView
 from app.web.addresses import ClientAddresses
-from app.web.auth import Instructor, client_address, client_headers, client_seat, client_token
+from app.web.auth import (
+    Instructor,
+    client_address,
+    client_headers,
+    client_instructor,
+    client_seat,
+)
 from app.web.panel import ControlPanel
 from app.web.scene import SceneView
 from models.dyros_jet import SCENE_XML
@@ -163,7 +170,7 @@ class Display:
     def _connect(self, client: Any) -> None:
         owner = str(client.client_id)
         registry, instructor = self.registry, self.instructor
-        drives = instructor.is_token(client_token(self.server, client))
+        drives = instructor.is_cookie(client_instructor(self.server, client))
         notice, read_only = None, False
         try:
             if registry.mode == "shared" or (drives and registry.has_shared):

@@ -18,7 +18,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from fastapi import APIRouter, Depends, HTTPException, Query
+from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.security import HTTPAuthorizationCredentials
 
 from app.live.frames import LiveFrame
@@ -37,7 +37,7 @@ from app.web.api.models import (
     params_dict,
     updates,
 )
-from app.web.auth import BEARER, Instructor
+from app.web.auth import BEARER, INSTRUCTOR_COOKIE, Instructor
 from controller import strategy
 
 # How long a handler waits for the loop to take its intent before answering anyway (a
@@ -157,9 +157,13 @@ def instructor_check(
     def writable(
         s: tuple[str, SessionView] = session,
         credentials: HTTPAuthorizationCredentials | None = bearer,
+        request: Request = None,  # type: ignore[assignment] - FastAPI gives it
     ) -> tuple[str, SessionView]:
         if not instructor.enabled or s[0] != SHARED:
             return s
+        cookie = request.cookies.get(INSTRUCTOR_COOKIE) if request is not None else None
+        if credentials is None and instructor.is_cookie(cookie):
+            return s  # the instructor's browser (its page gave the token once)
         if credentials is None:
             raise HTTPException(
                 401,

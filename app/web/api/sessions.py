@@ -33,7 +33,7 @@ from app.live.registry import (
 from app.live.session import SessionView
 from app.web.addresses import ClientAddresses
 from app.web.api.edges import conflict, finite, router
-from app.web.auth import BEARER, SEAT_COOKIE, Instructor, new_credential
+from app.web.auth import BEARER, INSTRUCTOR_COOKIE, SEAT_COOKIE, Instructor, new_credential
 
 HEADER = "X-Pelvic-Session"
 MINE = "mine"  # names the caller's own private session
@@ -61,8 +61,9 @@ def caller_of(instructor: Instructor, addresses: ClientAddresses | None = None):
     ) -> Caller:
         bearer = credentials.credentials if credentials is not None else None
         seat = request.cookies.get(SEAT_COOKIE)
+        teacher = request.cookies.get(INSTRUCTOR_COOKIE)
         return Caller(
-            instructor=instructor.is_token(bearer),
+            instructor=instructor.is_token(bearer) or instructor.is_cookie(teacher),
             credentials=tuple(c for c in (bearer, seat) if c),
             address=source.of_request(request),
         )
