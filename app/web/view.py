@@ -200,7 +200,8 @@ class Display:
                     session = registry.shared
             view = View(client, session, registry, notice, read_only=read_only)
         except Exception:  # noqa: BLE001 - a browser that left while its view was built
-            log.exception("could not build the view of a browser")
+            if not self._gone(client.client_id, built=False):
+                log.exception("could not build the view of a browser")
             self._forget(client)
             return
         self._add(client, view)
@@ -281,7 +282,8 @@ class Display:
                 client.scene.reset()
                 view = View(client, session, self.registry, OWN)
             except Exception:  # noqa: BLE001 - a browser that left while its view was built
-                log.exception("could not build the view of a browser")
+                if not self._gone(client.client_id, built=False):
+                    log.exception("could not build the view of a browser")
                 self._forget(client)
                 continue
             self._add(client, view)
@@ -313,20 +315,50 @@ class Display:
     def _run(self) -> None:
         while not self._stop.is_set():
             t0 = time.perf_counter()
-            with self._lock:
-                views = list(self.views.values())
             if self.waiting:
                 try:
                     self._admit_waiting(t0)
                 except Exception:  # noqa: BLE001 - must not kill the display either
                     log.exception("admitting a browser in line failed")
-            for view in views:
-                try:
-                    view.draw(t0)
-                except Exception:  # noqa: BLE001 - a drawing bug must not kill the display
-                    log.exception("display update failed")
-                    time.sleep(0.5)
+            # the views after the admissions: a browser admitted had its old view replaced and
+            # its scene reset (drawing the old one wrote to removed nodes)
+            with self._lock:
+                views = list(self.views.items())
+            self._draw_all(views, t0)
             self._stop.wait(max(0.0, self.period - (time.perf_counter() - t0)))
+
+    def _draw_all(self, views: list[tuple[Any, View | NoticeOnly]], now: float) -> None:
+        """Draw each view. A browser that closed while its view was drawn (viser has removed
+        its scene and panel: "Cannot assign to 'position' on a removed FrameHandle") is not a
+        fault: its view is dropped without a traceback; any other failure is logged."""
+        for key, view in views:
+            with self._lock:
+                if self.views.get(key) is not view:  # replaced or forgotten meanwhile
+                    continue
+            try:
+                view.draw(now)
+            except Exception:  # noqa: BLE001 - a drawing bug must not kill the display
+                if self._gone(key):
+                    log.debug("a browser left while its view was drawn")
+                    with self._lock:
+                        self.views.pop(key, None)
+                    continue
+                log.exception("display update failed")
+                time.sleep(0.5)
+
+    def _gone(self, key: Any, built: bool = True) -> bool:
+        """Whether the browser of view ``key`` has disconnected (None: the server's own view,
+        never). ``built``: its view was added (a view forgotten meanwhile has left too)."""
+        if key is None:
+            return False
+        if built:
+            with self._lock:
+                if key not in self.views:
+                    return True
+        try:
+            return key not in self.server.get_clients()
+        except Exception:  # noqa: BLE001 - a server stopping: say gone, not an error
+            return True
 
     def health(self) -> dict[str, Any]:
         with self._lock:
