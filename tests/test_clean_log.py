@@ -73,6 +73,28 @@ def test_a_drawing_fault_of_a_connected_browser_is_still_logged(caplog, monkeypa
     assert 1 in d.views and None in d.views  # kept: its browser is still there
 
 
+def test_a_view_built_for_a_browser_that_left_meanwhile_is_not_kept():
+    """A browser that closed while its view was built (its disconnect already ran) would keep
+    a view drawn to a closed connection for ever; its session is detached again."""
+
+    class _Registry:
+        detached: list[str] = []
+
+        def detach(self, owner: str) -> None:
+            self.detached.append(owner)
+
+    class _Client:
+        client_id = 7
+
+    d = _display(_Server([]), {})
+    d.waiting, d.registry = {}, _Registry()
+    d._add(_Client(), _View())
+    assert d.views == {} and d.registry.detached == ["7"]
+    d.server = _Server([7])  # still there: kept
+    d._add(_Client(), _View())
+    assert list(d.views) == [7]
+
+
 # -- a served tool, browsers coming and going ------------------------------------------------
 class _Scene:
     """A scene connection (a browser's tab) held open in a thread until closed."""
@@ -102,13 +124,13 @@ class _Scene:
         self._thread.join(30)
 
 
-def _until(check, what: str) -> None:
+def _until(check, what: str, state=lambda: "") -> None:
     deadline = time.monotonic() + WAIT_S
     while time.monotonic() < deadline:
         if check():
             return
         time.sleep(0.25)
-    pytest.fail(f"waited {WAIT_S:.0f} s for {what}")
+    pytest.fail(f"waited {WAIT_S:.0f} s for {what}; {state()}")
 
 
 @pytest.mark.slow
@@ -140,8 +162,12 @@ def test_closing_browsers_leaves_no_traceback_in_the_log():
             time.sleep(2.0)  # its new view is drawn a while
             for tab in tabs:
                 tab.close()
-            _until(lambda: health()["views"] == 0 and private() == 0, "every view to go")
+            _until(
+                lambda: health()["views"] == 0 and private() == 0,
+                "every view to go",
+                lambda: f"health {health()}, {private()} private; {server.output(30)}",
+            )
         time.sleep(1.0)  # a frame in flight when the last browser closed
         out = server.output(400)
     assert "Traceback" not in out and "display update failed" not in out, out
-    assert "removed FrameHandle" not in out, out
+    assert "removed FrameHandle" not in out and "on a closed connection" not in out, out

@@ -30,6 +30,7 @@ import logging
 import math
 import threading
 import time
+import warnings
 from typing import Any
 
 import mujoco
@@ -50,6 +51,11 @@ from app.web.scene import SceneView
 from models.dyros_jet import SCENE_XML
 
 log = logging.getLogger(__name__)
+# A frame drawn for a browser in the instant between its tab closing and the display hearing
+# of it is only dropped by viser; not worth a warning in the server's log per closed browser
+warnings.filterwarnings(
+    "ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning
+)
 DISPLAY_HZ = 20.0  # scene updates per second at most (--display-hz)
 ALERT_S = 300.0  # [s] a worker's death is shown this long
 ADMIT_EVERY_S = 1.0  # [s] how often the display looks for room for the browsers in line
@@ -291,6 +297,11 @@ class Display:
     def _add(self, client: Any, view: View | NoticeOnly) -> None:
         with self._lock:
             self.views[client.client_id] = view
+        # a browser that closed while its view was built: its disconnect may have run before
+        # this (viser unlists a client before it calls back), so the view would be drawn to a
+        # closed connection for ever, its session gone
+        if self._gone(client.client_id, built=False):
+            self._forget(client)
 
     def _forget(self, client: Any) -> None:
         with self._lock:
