@@ -157,7 +157,8 @@ def instructor_check(
     def writable(
         s: tuple[str, SessionView] = session,
         credentials: HTTPAuthorizationCredentials | None = bearer,
-        request: Request = None,  # type: ignore[assignment] - FastAPI gives it
+        # (FastAPI always gives it; None only when called directly, as a test does)
+        request: Request = None,  # type: ignore[assignment]
     ) -> tuple[str, SessionView]:
         if not instructor.enabled or s[0] != SHARED:
             return s
