@@ -397,7 +397,12 @@ def _simulate(args: argparse.Namespace) -> int:
         why = unsuccessful_text(summary["unsuccessful"], le, summary["solver_failure_share"])
         print(f"not a success: {why}")
     if summary["strategy_error"]:
-        print(f"stopped at t = {summary['strategy_error_time']:.3f} s: {summary['strategy_error']}")
+        step = summary.get("strategy_error_step")
+        where = f" in step {step} (s.step)" if step is not None and step >= 0 else ""
+        print(
+            f"stopped at t = {summary['strategy_error_time']:.3f} s{where}: "
+            f"{summary['strategy_error']}"
+        )
     tick_ms = params.control_dt * 1e3
     if summary["strategy_ms_median"] > tick_ms:
         print(

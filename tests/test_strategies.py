@@ -422,7 +422,8 @@ def test_a_strategy_stopped_at_step_3_is_said_stopped_at_step_3_everywhere(user_
     assert (s["steps_completed"], s["steps_planned"]) == (3, 10)
     capsys.readouterr()
     cli_main(["simulate", "--strategy", f"{path}:AtThree", "--step-length", "0.2", "--steps", "10"])
-    assert "3/10 steps" in capsys.readouterr().out
+    out = capsys.readouterr().out
+    assert "3/10 steps" in out and "in step 3 (s.step): ValueError: stop at step 3" in out
 
     sim = LiveSim(ControllerParams().replace(walk={"n_steps": 10}), methods=["at_three"],
                   speed=4.0, sleep=lambda _s: None)  # fmt: skip
