@@ -26,7 +26,7 @@ $(TEST_STAMP): $(STAMP)
 # them in __pycache__: one short walk compiles them once (about 15 s of CPU) rather than every
 # test or worker process that happens to start first; a changed kernel module compiles again.
 KERNELS := $(VENV)/.kernels
-$(KERNELS): $(STAMP) $(wildcard controller/*.py) app/sim/world.py
+$(KERNELS): $(STAMP) $(wildcard controller/*.py) pelvic_walk/core/world.py
 	$(BIN)/pelvic-walk simulate --method mpc --step-length 0.2 --steps 1 > /dev/null
 	@touch $@
 

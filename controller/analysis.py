@@ -58,12 +58,22 @@ def hip_centre_offset(l_pel: float, theta_deg: float, rule: str = "paper") -> fl
     raise ValueError(f"rule must be one of {RULES}, got {rule!r}")
 
 
+# The paper's inputs to the analysis (Sec. II): l_leg, z0, l_pel, w_step [m], theta_pel [deg]
+PAPER_L_LEG, PAPER_Z0, PAPER_L_PEL, PAPER_W_STEP, PAPER_THETA_PEL_DEG = (
+    0.75,
+    0.68,
+    0.21,
+    0.243,
+    45.0,
+)
+
+
 def kinematic_analysis(
-    l_leg: float = 0.75,
-    z0: float = 0.68,
-    l_pel: float = 0.21,
-    w_step: float = 0.243,
-    theta_pel_deg: float = 45.0,
+    l_leg: float = PAPER_L_LEG,
+    z0: float = PAPER_Z0,
+    l_pel: float = PAPER_L_PEL,
+    w_step: float = PAPER_W_STEP,
+    theta_pel_deg: float = PAPER_THETA_PEL_DEG,
     rule: str = "paper",
 ) -> dict:
     """Maximum step lengths of eq. (1)-(5) [m] and the paper's increase [%].

@@ -1,24 +1,30 @@
 """One control tick chaining the paper's layers (Fig. 3), at 200 Hz.
 
-Order of a tick (docs/DESIGN.md, "One control tick"):
- 1. footstep plan (re-planned from the next step when walking parameters change),
- 2. ZMP reference and 3. CoM MPC (eq. 10-18), predicted CoM (eq. 25-26),
- 4. pelvis position (eq. 19), 5. foot trajectories (eq. 20-21),
- 6. reference pelvic angle over the horizon (eq. 27-33),
- 7. the pelvis strategy's waist rate (``controller.strategy``: the pelvic-rotation MPC of
-    eq. 34-38 for the paper's method, 0 for the fixed pelvis, free for redundancy, or a
-    user's own),
- 8. QP inverse kinematics of the 13 lower-body joints (eq. 39-40),
- 9. arm swing on the centroidal momentum matrix (eq. 41-43),
-10. joint targets for the position servos.
+``Walker.tick`` is Fig. 3 as one method per block, called in this order (docs/DESIGN.md, "One
+control tick"); each hands its results by name to the blocks after it:
+ 1-2, 5. ``_plan_rows``: the footstep plan (re-planned from the next step when walking
+    parameters change) sampled for the tick: ZMP reference and bounds over the horizon, foot
+    trajectories (eq. 20-21),
+ 3. ``_predicted_com``: CoM MPC (eq. 10-18), predicted CoM (eq. 25-26),
+ 4. ``_measured_com`` and ``_pelvis_position``: pelvis position (eq. 19),
+ 6. ``_reference_angles``: reference pelvic angle over the horizon (eq. 27-33),
+ 7. ``_pelvis_strategy``: the pelvis strategy's waist rate (``controller.strategy``: the
+    pelvic-rotation MPC of eq. 34-38 for the paper's method, 0 for the fixed pelvis, free for
+    redundancy, or a user's own) from its inputs built by field name,
+ 8. ``_inverse_kinematics``: QP inverse kinematics of the 13 lower-body joints (eq. 39-40),
+ 9. ``_arm_swing``: arm swing on the centroidal momentum matrix (eq. 41-43),
+10. ``_joint_targets``: joint targets for the position servos (eq. 40).
 
 Paper symbols -> names here:
-    X_pel (eq. 19)            -> ``p_world_pelvis_des``
-    X_c^d, X_c^m (eq. 19)     -> ``p_world_com_des``, ``p_world_com_meas``
-    K_p (eq. 19)              -> ``params.com.pelvis_gain``
-    theta_pel, theta_dot      -> ``StrategyInputs.theta`` (``q_cmd[0]``, commanded), ``.theta_dot``
-    q_low, q_up (eq. 6-7)     -> ``q_cmd[lower]``, ``q_cmd[arms]``
-    h_low^yaw, h_up^yaw       -> ``TickOutput.h_low``, ``TickOutput.h_up``
+    X_pel (eq. 19)           -> ``p_world_pelvis_des``
+    X_c^d, X_c^m (eq. 19)    -> ``p_world_com_des``, ``p_world_com_meas``
+    K_p (eq. 19)             -> ``params.com.pelvis_gain``
+    X_c (eq. 25-26)          -> ``com_plan.com`` (the predicted CoM over the horizon)
+    Delta d_FP,y (eq. 31-32) -> ``lateral``
+    Theta_pel^ref (eq. 33)   -> ``theta_ref``
+    theta_pel, theta_dot     -> ``StrategyInputs.theta`` (``q_cmd[0]``, commanded), ``.theta_dot``
+    q_low, q_up (eq. 6-7)    -> ``q_cmd[lower]``, ``q_cmd[arms]``
+    h_low^yaw, h_up^yaw      -> ``TickOutput.h_low``, ``TickOutput.h_up``
 
 Choices where the paper is vague (documented here once):
 - Eq. (19) is applied with a feed-forward term: the desired pelvis moves with the desired CoM
@@ -213,169 +219,49 @@ class Walker:
         """True once the plan (all steps and the final stand) is over."""
         return self.t >= self.plan.t_end
 
-    # -- the tick ----------------------------------------------------------------------------
+    def snapshot_params(self) -> ControllerParams:
+        """The parameters in force (pending ones included)."""
+        return self._pending or self.params
+
+    def replace_params(self, **groups) -> None:
+        """Convenience: ``w.replace_params(walk=dict(step_length=0.3))``."""
+        self.set_params(self.snapshot_params().replace(**groups))
+
+    # -- the tick: one method per block of Fig. 3 -------------------------------------------
     def tick(self, q_meas: np.ndarray) -> TickOutput:
-        """Run one control period from the measured joint angles; return the new targets."""
+        """Run one control period from the measured joint angles; return the new targets.
+
+        One method per block of Fig. 3 (the numbers are the module docstring's); with a clock,
+        ``c0``-``c7`` read it between the blocks (``TickOutput.layer_s``)."""
         if self._pending is not None:
             self._apply_pending()
-        p = self.params
-        dt = self.dt
         t = self.t
-        clock = self.clock
-        c0 = clock() if clock else 0.0
-        # 1-2. The plan at t (phase, anchoring), t + dt (foot targets) and the CoM MPC's N
-        # samples (ZMP reference and bounds, feet for step 6): rows of the plan's table.
-        com_mpc = self.com_mpc
-        plan, times = self._plan_rows(t, p.com.zmp_margin)
-        h = slice(2, None)  # the horizon's rows
-        c1 = clock() if clock else 0.0
-
-        # 3. CoM MPC (eq. 10-18); predicted CoM over the horizon (eq. 25-26).
-        com_plan = com_mpc.solve_references(
-            self.com_state, t, times, plan.zmp_ref[h], plan.zmp_lo[h], plan.zmp_hi[h]
+        clock = self.clock or float  # no clock: every reading is float() = 0.0
+        c0 = clock()
+        plan, times = self._plan_rows(t, self.params.com.zmp_margin)  # 1-2, 5
+        c1 = clock()
+        com_plan, p_world_com_des = self._predicted_com(t, plan, times)  # 3
+        c2 = clock()
+        p_world_com_meas = self._measured_com(q_meas, plan)  # 4
+        c3 = clock()
+        v_world_pelvis = self._pelvis_position(p_world_com_des, p_world_com_meas)  # 4
+        theta_ref, lateral = self._reference_angles(plan, com_plan, p_world_com_des)  # 6
+        s0 = clock()
+        waist_rate, pelvis_plan = self._pelvis_strategy(  # 7
+            t, plan, com_plan, p_world_com_des, theta_ref
         )
-        self.com_state = com_plan.next_state
-        p_world_com_des = self.com_state[0].copy()
-        c2 = clock() if clock else 0.0
-
-        # 4. Pelvis position (eq. 19): measured CoM with the soles at their planned places,
-        # each sole's share following the ZMP reference from one foot to the other.
-        p_world_com_meas = self._measured_com(
-            q_meas, plan.p_left[0], plan.p_right[0], plan.zmp_ref[0]
+        c4 = clock()
+        ks = self.kin.compute(self.q_cmd)  # the kinematics the IK and the arms run on
+        c5 = clock()
+        q_dot_low, ik_ok = self._inverse_kinematics(plan, ks, v_world_pelvis, waist_rate)  # 8
+        c6 = clock()
+        q_dot_up, arm_ok = self._arm_swing(ks, q_dot_low)  # 9
+        c7 = clock()
+        q_dot, self.q_cmd, speed_limited = _joint_targets(  # 10
+            self.q_cmd, q_dot_low, q_dot_up, self.arms, self.dt, self.params.ik.joint_speed_limit
         )
-        c3 = clock() if clock else 0.0
-        v_world_pelvis = _pelvis_step(
-            self.p_world_pelvis_des,
-            p_world_com_des,
-            self._last_com_des(p_world_com_des),
-            p_world_com_meas,
-            p.com.pelvis_gain,
-            self.pelvis_height,
-            dt,
-        )
-
-        # 6. Reference pelvic angle over the horizon (eq. 27-33).
-        feet_l, feet_r = plan.p_left[h, :2], plan.p_right[h, :2]  # the soles over the horizon
-        com_h = com_plan.com
-        if p.pelvis.reference == "now":  # ablation: no prediction, the state now held
-            n_h = len(com_h)
-            com_h = np.tile(p_world_com_des[:2], (n_h, 1))
-            feet_l = np.tile(plan.p_left[0, :2], (n_h, 1))
-            feet_r = np.tile(plan.p_right[0, :2], (n_h, 1))
-        lateral = lateral_distances(
-            p.pelvis.lateral_distance,
-            com_h,
-            feet_l,
-            feet_r,
-            p_world_com_des,  # the CoM MPC's state now (the estimate would feed noise in)
-            plan.p_left[0, :2],
-            plan.p_right[0, :2],
-            p.walk.step_width / 2,
-            p.pelvis.lateral_floor,
-        )
-        theta_ref = reference_pelvic_angles(com_h, feet_l, feet_r, p.pelvis.k_pel, lateral)
-
-        # 7. The pelvis strategy's waist rate (the paper's: the pelvic MPC, eq. 34-38).
-        arms = self.arms
-        theta_ref.flags.writeable = False  # read-only for the strategy (and the displays)
-        com_plan.com.flags.writeable = False
-        s0 = clock() if clock else 0.0
-        waist_rate = self.strategy.waist_rate(
-            StrategyInputs(
-                t,
-                dt,
-                float(self.q_cmd[0]),
-                self._last_waist_rate,
-                theta_ref,
-                self.com_mpc.sample_offsets,
-                com_plan.com,
-                _read_only(p_world_com_des),
-                plan.p_left[h],  # views of the plan's read-only table
-                plan.p_right[h],
-                plan.p_left[0],
-                plan.p_right[0],
-                _SIDE[plan.support_side[0]] if plan.in_ssp[0] else "both",
-                _SIDE.get(plan.swing_side[0]),
-                int(plan.step[0]),
-                float(plan.s_ssp[0]),
-                p,
-            )
-        )
-        pelvis_plan = self.strategy.plan
-        c4 = clock() if clock else 0.0
-
-        # 8. QP inverse kinematics (eq. 39-40) on the commanded state.
-        ks: KinState = self.kin.compute(self.q_cmd)
-        c5 = clock() if clock else 0.0
-        # foot targets at the next tick (row 1 of the sample), relative to the pelvis
-        p_des_l, p_des_r, v_ff_l, v_ff_r = _foot_targets(
-            plan.p_left[1],
-            plan.v_left[1],
-            plan.p_right[1],
-            plan.v_right[1],
-            self.p_world_pelvis_des,
-            v_world_pelvis,
-        )
-        v_des = flat_foot_velocity_command(  # flat feet: desired poses given as positions
-            ks.T_pelvis_left_sole,
-            p_des_l,
-            v_ff_l,
-            ks.T_pelvis_right_sole,
-            p_des_r,
-            v_ff_r,
-            p.ik.foot_gain,
-        )
-        q_low = self.q_cmd[:13]  # the lower joints (a view: q_cmd is replaced, never written)
-        qp = build_ik(
-            ks.J_low, v_des, q_low, self._q_min_low, self._q_max_low, p.ik, dt, waist_rate
-        )
-        q_dot_low, ik_ok = solve_ik(qp, self.ik_solver)
-        if not ik_ok:
-            q_dot_low = np.zeros(13)  # fall back: hold the last command
-        self._last_waist_rate = float(q_dot_low[0])
-        c6 = clock() if clock else 0.0
-
-        # 9. Arm swing (eq. 41-43) with the lower-body velocities just computed.
-        arm_ok = True
-        if p.arms.enabled:
-            aqp = build_arm_qp(
-                ks.cmm_yaw_low,
-                q_dot_low,
-                ks.cmm_yaw_up,
-                self.q_cmd[arms],
-                self._q_init_arms,
-                self._q_min_arms,
-                self._q_max_arms,
-                p.ik.joint_speed_limit,
-                p.arms,
-                dt,
-            )
-            q_dot_up, arm_ok = solve_arm(aqp, self.arm_solver)
-            if not arm_ok:
-                q_dot_up = np.zeros(len(arms))
-        else:
-            # Arms off: return gently to the initial pose (and stay there).
-            q_dot_up = np.clip((self._q_init_arms - self.q_cmd[arms]) / 0.2, -1.0, 1.0)
-        c7 = clock() if clock else 0.0
-
-        # 10. Joint targets (eq. 40).
-        q_dot, self.q_cmd, speed_limited = _joint_targets(
-            self.q_cmd, q_dot_low, q_dot_up, arms, dt, p.ik.joint_speed_limit
-        )
-        failures = {
-            "com_mpc": not com_plan.ok,
-            "pelvis_mpc": pelvis_plan is not None and not pelvis_plan.ok,
-            "ik": not ik_ok,
-            "arm_swing": not arm_ok,
-        }
-        failed_tick = False
-        for name, failed in failures.items():
-            if failed:
-                self.failure_counts[name] += 1
-                failed_tick = True
-        self.ticks += 1
-        self.failed_ticks += failed_tick
-        self.t = t + dt
+        failures = self._count_failures(com_plan, pelvis_plan, ik_ok, arm_ok)
+        self.t = t + self.dt
         return TickOutput(
             t=t,
             q_target=self.q_cmd.copy(),
@@ -399,27 +285,16 @@ class Walker:
             swing_side=int(plan.swing_side[0]),
             failures=failures,
             speed_limited=bool(speed_limited),
-            layer_s=(
-                {
-                    "plan": c1 - c0,
-                    "com_mpc": c2 - c1,
-                    "kinematics": (c3 - c2) + (c5 - c4),
-                    "pelvis_mpc": c4 - c3,
-                    "ik": c6 - c5,
-                    "arm_swing": c7 - c6,
-                }
-                if clock
-                else {}
-            ),
+            layer_s=_layer_times(c0, c1, c2, c3, c4, c5, c6, c7) if self.clock else {},
             strategy_s=c4 - s0,
         )
 
-    # -- helpers -----------------------------------------------------------------------------
     def _plan_rows(self, t: float, margin: float) -> tuple[PlanSample, np.ndarray]:
-        """The plan at t, t + dt and the CoM MPC's N samples (``PlanSample`` of N + 2 rows),
-        and the N sample times t + k T_p: a row of the table of the coming ticks, filled
-        again by the plan's sampler when the plan, the margin or the horizon changed, or the
-        table ran out (``controller.footsteps.TickSamples``: the values the sampler gives)."""
+        """1-2, 5. The plan at t, t + dt and the CoM MPC's N samples (``PlanSample`` of N + 2
+        rows: phase, ZMP reference and bounds, feet), and the N sample times t + k T_p: a row
+        of the table of the coming ticks, filled again by the plan's sampler when the plan, the
+        margin or the horizon changed, or the table ran out
+        (``controller.footsteps.TickSamples``: the values the sampler gives)."""
         offsets = self.com_mpc.sample_offsets
         table, j = self._plan_table, self._plan_row
         if table is None or not table.covers(self.plan, margin, offsets, t, j):
@@ -428,47 +303,218 @@ class Walker:
         self._plan_row = j + 1
         return table.at(j), table.times[j, 2:]
 
+    def _predicted_com(
+        self, t: float, plan: PlanSample, times: np.ndarray
+    ) -> tuple[ComPlan, np.ndarray]:
+        """3. The CoM MPC (eq. 10-18) on the ZMP reference and bounds over the horizon: the
+        predicted CoM (eq. 25-26) and X_c^d, the desired CoM x, y its first input reaches."""
+        h = _HORIZON
+        com_plan = self.com_mpc.solve_references(
+            self.com_state, t, times, plan.zmp_ref[h], plan.zmp_lo[h], plan.zmp_hi[h]
+        )
+        self.com_state = com_plan.next_state
+        return com_plan, self.com_state[0].copy()
+
+    def _measured_com(self, q_meas: np.ndarray, plan: PlanSample) -> np.ndarray:
+        """4. X_c^m: the CoM from the measured joints, the base placed so the soles are where
+        planned now.
+
+        Each sole anchors one estimate (the base placed by a sole is ``sole - p_pelvis_sole``:
+        what :meth:`RobotKinematics.support_anchored_base` +
+        :meth:`RobotKinematics.com_world` compute in two passes); they are blended by
+        :func:`support_share`, which follows the ZMP reference: the support sole alone in
+        single support, a continuous hand-over in the double support. The two estimates differ
+        by a few millimetres (the measured legs do not close the loop between the planned
+        soles exactly); switching between them at lift-off and touch-down made eq. (19) jerk
+        the pelvis sideways by that much within a few ticks, which threw the centre of pressure
+        to the support foot's outer edge.
+        """
+        p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)
+        return _anchored_com(
+            p_pelvis_com, p_pelvis_soles, plan.p_left[0], plan.p_right[0], plan.zmp_ref[0]
+        )
+
+    def _pelvis_position(
+        self, p_world_com_des: np.ndarray, p_world_com_meas: np.ndarray
+    ) -> np.ndarray:
+        """4. X_pel by eq. (19) with its feed-forward (module docstring), in place on
+        ``p_world_pelvis_des``; returns the pelvis velocity (3,) over the tick."""
+        return _pelvis_step(
+            self.p_world_pelvis_des,
+            p_world_com_des,
+            self._last_com_des(p_world_com_des),
+            p_world_com_meas,
+            self.params.com.pelvis_gain,
+            self.pelvis_height,
+            self.dt,
+        )
+
     def _last_com_des(self, now: np.ndarray) -> np.ndarray:
         """The desired CoM of the previous tick (for the feed-forward of eq. 19)."""
         prev = self._com_des_prev
         self._com_des_prev = now.copy()
         return now if prev is None else prev
 
-    def _measured_com(
-        self, q_meas: np.ndarray, foot_l: np.ndarray, foot_r: np.ndarray, zmp_ref: np.ndarray
-    ) -> np.ndarray:
-        """CoM from the measured joints, the base placed so the soles are where planned.
+    def _reference_angles(
+        self, plan: PlanSample, com_plan: ComPlan, p_world_com_des: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """6. Theta_pel^ref over the horizon (eq. 27-33) from the predicted CoM and the planned
+        soles, and the lateral distances Delta d_FP,y of eq. (31)-(32) it used."""
+        p = self.params.pelvis
+        h = _HORIZON
+        com_h, feet_l, feet_r = com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2]
+        if p.reference == "now":  # ablation: no prediction, the state now held
+            n_h = len(com_h)
+            com_h = np.tile(p_world_com_des[:2], (n_h, 1))
+            feet_l = np.tile(plan.p_left[0, :2], (n_h, 1))
+            feet_r = np.tile(plan.p_right[0, :2], (n_h, 1))
+        lateral = lateral_distances(
+            p.lateral_distance,
+            com_h,
+            feet_l,
+            feet_r,
+            p_world_com_des,  # the CoM MPC's state now (the estimate would feed noise in)
+            plan.p_left[0, :2],
+            plan.p_right[0, :2],
+            self.params.walk.step_width / 2,
+            p.lateral_floor,
+        )
+        return reference_pelvic_angles(com_h, feet_l, feet_r, p.k_pel, lateral), lateral
 
-        ``foot_l``, ``foot_r`` are the planned left and right soles now. Each sole anchors one
-        estimate (the base placed by a sole is ``sole - p_pelvis_sole``: what
-        :meth:`RobotKinematics.support_anchored_base` + :meth:`RobotKinematics.com_world`
-        compute in two passes); they are blended by :func:`support_share`, which follows the
-        ZMP reference: the support sole alone in single support, a continuous hand-over in the
-        double support. The two estimates differ by a few millimetres (the measured legs do
-        not close the loop between the planned soles exactly); switching between them at
-        lift-off and touch-down made eq. (19) jerk the pelvis sideways by that much within a
-        few ticks, which threw the centre of pressure to the support foot's outer edge.
-        """
-        p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)
-        return _anchored_com(p_pelvis_com, p_pelvis_soles, foot_l, foot_r, zmp_ref)
+    def _pelvis_strategy(
+        self,
+        t: float,
+        plan: PlanSample,
+        com_plan: ComPlan,
+        p_world_com_des: np.ndarray,
+        theta_ref: np.ndarray,
+    ) -> tuple[float | None, PelvisPlan | None]:
+        """7. The pelvis strategy's waist rate theta_dot (the paper's: the pelvic-rotation MPC,
+        eq. 34-38; ``None``: the waist free to the IK) and the plan it drew, if any."""
+        # read-only for the strategy (and the displays); the soles are views of the plan's
+        # read-only table
+        theta_ref.flags.writeable = False
+        com_plan.com.flags.writeable = False
+        p_world_com_des.flags.writeable = False
+        h = _HORIZON
+        rate = self.strategy.waist_rate(
+            StrategyInputs(
+                t=t,
+                dt=self.dt,
+                theta=float(self.q_cmd[0]),
+                theta_dot=self._last_waist_rate,
+                theta_ref=theta_ref,
+                horizon_t=self.com_mpc.sample_offsets,
+                com=com_plan.com,
+                com_now=p_world_com_des,
+                left_sole=plan.p_left[h],
+                right_sole=plan.p_right[h],
+                left_sole_now=plan.p_left[0],
+                right_sole_now=plan.p_right[0],
+                support=_SIDE[plan.support_side[0]] if plan.in_ssp[0] else "both",
+                swing=_SIDE.get(plan.swing_side[0]),
+                step=int(plan.step[0]),
+                phase=float(plan.s_ssp[0]),
+                params=self.params,
+            )
+        )
+        return rate, self.strategy.plan
 
-    def snapshot_params(self) -> ControllerParams:
-        """The parameters in force (pending ones included)."""
-        return self._pending or self.params
+    def _inverse_kinematics(
+        self,
+        plan: PlanSample,
+        ks: KinState,
+        v_world_pelvis: np.ndarray,
+        waist_rate: float | None,
+    ) -> tuple[np.ndarray, bool]:
+        """8. QP inverse kinematics (eq. 39-40) on the commanded state: q_dot_low (13,) toward
+        the feet's targets at the next tick (row 1 of the plan's rows, relative to the pelvis),
+        the waist pinned to ``waist_rate``; 0 (the last command held) if the QP failed."""
+        p = self.params
+        p_des_l, p_des_r, v_ff_l, v_ff_r = _foot_targets(
+            plan.p_left[1],
+            plan.v_left[1],
+            plan.p_right[1],
+            plan.v_right[1],
+            self.p_world_pelvis_des,
+            v_world_pelvis,
+        )
+        v_des = flat_foot_velocity_command(  # flat feet: desired poses given as positions
+            ks.T_pelvis_left_sole,
+            p_des_l,
+            v_ff_l,
+            ks.T_pelvis_right_sole,
+            p_des_r,
+            v_ff_r,
+            p.ik.foot_gain,
+        )
+        q_low = self.q_cmd[:13]  # the lower joints (a view: q_cmd is replaced, never written)
+        qp = build_ik(
+            ks.J_low, v_des, q_low, self._q_min_low, self._q_max_low, p.ik, self.dt, waist_rate
+        )
+        q_dot_low, ok = solve_ik(qp, self.ik_solver)
+        if not ok:
+            q_dot_low = np.zeros(13)
+        self._last_waist_rate = float(q_dot_low[0])
+        return q_dot_low, ok
 
-    def replace_params(self, **groups) -> None:
-        """Convenience: ``w.replace_params(walk=dict(step_length=0.3))``."""
-        self.set_params(self.snapshot_params().replace(**groups))
+    def _arm_swing(self, ks: KinState, q_dot_low: np.ndarray) -> tuple[np.ndarray, bool]:
+        """9. q_dot_up of the arm swing (eq. 41-43) on the centroidal momentum matrix, against
+        the lower body's q_dot_low just computed; 0 if the QP failed. Arms off: back gently to
+        the initial pose (and stay there)."""
+        p, arms = self.params, self.arms
+        if not p.arms.enabled:
+            return np.clip((self._q_init_arms - self.q_cmd[arms]) / 0.2, -1.0, 1.0), True
+        aqp = build_arm_qp(
+            ks.cmm_yaw_low,
+            q_dot_low,
+            ks.cmm_yaw_up,
+            self.q_cmd[arms],
+            self._q_init_arms,
+            self._q_min_arms,
+            self._q_max_arms,
+            p.ik.joint_speed_limit,
+            p.arms,
+            self.dt,
+        )
+        q_dot_up, ok = solve_arm(aqp, self.arm_solver)
+        return (q_dot_up, True) if ok else (np.zeros(len(arms)), False)
+
+    def _count_failures(
+        self, com_plan: ComPlan, pelvis_plan: PelvisPlan | None, ik_ok: bool, arm_ok: bool
+    ) -> dict[str, bool]:
+        """Which QP failed this tick (layer -> bool), counted per layer and per tick."""
+        failures = {
+            "com_mpc": not com_plan.ok,
+            "pelvis_mpc": pelvis_plan is not None and not pelvis_plan.ok,
+            "ik": not ik_ok,
+            "arm_swing": not arm_ok,
+        }
+        self.ticks += 1
+        if True in failures.values():  # rare: the loop only then
+            self.failed_ticks += 1
+            for name, failed in failures.items():
+                self.failure_counts[name] += failed
+        return failures
 
 
+_HORIZON = slice(2, None)  # the horizon's rows of the tick's PlanSample (after t and t + dt)
 # StrategyInputs.support and .swing by side (LEFT, RIGHT; a numpy integer hashes as its int)
 _SIDE = {LEFT: "left", RIGHT: "right"}
 
 
-def _read_only(a: np.ndarray) -> np.ndarray:
-    """``a`` (a view of the tick's plan rows) made read-only for the strategy."""
-    a.flags.writeable = False
-    return a
+def _layer_times(c0, c1, c2, c3, c4, c5, c6, c7) -> dict[str, float]:
+    """``TickOutput.layer_s`` from the clock's readings around the layers: the kinematics are
+    the measured CoM (c2-c3) and the commanded joints' (c4-c5); the pelvis position and
+    reference count with the strategy (c3-c4)."""
+    return {
+        "plan": c1 - c0,
+        "com_mpc": c2 - c1,
+        "kinematics": (c3 - c2) + (c5 - c4),
+        "pelvis_mpc": c4 - c3,
+        "ik": c6 - c5,
+        "arm_swing": c7 - c6,
+    }
 
 
 @kernel

@@ -24,24 +24,70 @@ Write how the pelvis turns (docs/STRATEGIES.md) and run it beside the paper's MP
 Drive a served tool (``pelvic-walk serve``): ``pw.Client("http://127.0.0.1:8000")``.
 """
 
-from controller.strategy import (
-    PelvisStrategy,
-    StrategyError,
-    StrategyInputs,
-    StrategyLoadError,
-)
-from pelvic_walk._client import (
-    ApiError,
-    Busy,
-    Client,
-    Conflict,
-    InvalidRequest,
-    NotAllowed,
-    NotFound,
-)
-from pelvic_walk._plots import DEFAULT_PANELS, PANELS, plot
-from pelvic_walk._run import Player, Run, analyze, compare, robot, simulate
-from pelvic_walk._sweep import sweep
+from __future__ import annotations
+
+import importlib
+from typing import TYPE_CHECKING, Any
+
+# Each public name and the module that defines it, imported when first used (PEP 562): the
+# faces import the core (``pelvic_walk.core``) through this package, and a command line or a
+# live worker that needs a walk does not load the HTTP client or the plots with it.
+_WHERE = {
+    "PelvisStrategy": "controller.strategy",
+    "StrategyError": "controller.strategy",
+    "StrategyInputs": "controller.strategy",
+    "StrategyLoadError": "controller.strategy",
+    "ApiError": "pelvic_walk._client",
+    "Busy": "pelvic_walk._client",
+    "Client": "pelvic_walk._client",
+    "Conflict": "pelvic_walk._client",
+    "InvalidRequest": "pelvic_walk._client",
+    "NotAllowed": "pelvic_walk._client",
+    "NotFound": "pelvic_walk._client",
+    "DEFAULT_PANELS": "pelvic_walk._plots",
+    "PANELS": "pelvic_walk._plots",
+    "plot": "pelvic_walk._plots",
+    "Player": "pelvic_walk._run",
+    "Run": "pelvic_walk._run",
+    "analyze": "pelvic_walk._run",
+    "compare": "pelvic_walk._run",
+    "robot": "pelvic_walk._run",
+    "simulate": "pelvic_walk._run",
+    "sweep": "pelvic_walk._sweep",
+}
+
+if TYPE_CHECKING:
+    from controller.strategy import (
+        PelvisStrategy,
+        StrategyError,
+        StrategyInputs,
+        StrategyLoadError,
+    )
+    from pelvic_walk._client import (
+        ApiError,
+        Busy,
+        Client,
+        Conflict,
+        InvalidRequest,
+        NotAllowed,
+        NotFound,
+    )
+    from pelvic_walk._plots import DEFAULT_PANELS, PANELS, plot
+    from pelvic_walk._run import Player, Run, analyze, compare, robot, simulate
+    from pelvic_walk._sweep import sweep
+
+
+def __getattr__(name: str) -> Any:
+    where = _WHERE.get(name)
+    if where is None:
+        raise AttributeError(f"module 'pelvic_walk' has no attribute {name!r}")
+    value = getattr(importlib.import_module(where), name)
+    globals()[name] = value  # once: later lookups do not come here
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(__all__)
 
 
 def strategies() -> list[str]:

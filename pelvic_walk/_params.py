@@ -15,9 +15,9 @@ import os
 from collections.abc import Mapping
 from typing import Any
 
-from app.params_cli import fields, option_name
 from controller import strategy
 from controller.params import ControllerParams, check_value
+from pelvic_walk.core.params import fields, option_name
 
 BACKENDS = ("daqp", "osqp")
 

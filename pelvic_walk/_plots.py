@@ -12,9 +12,9 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from app.methods import METHOD_INFO, method_hex
-from app.sim.metrics import KAPPA_SINGULAR
 from controller.params import GROUPS, ControllerParams
+from pelvic_walk.core.methods import METHOD_INFO, method_hex
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure

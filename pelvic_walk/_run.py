@@ -2,7 +2,7 @@
 (:func:`compare`) and the kinematic analysis (:func:`analyze`).
 
 A run is ``pelvic-walk simulate``'s run: the same parameters, seed and checks
-(``app.runs.spec_of``: the study's run of the same cell), so ``Run.summary`` equals
+(``pelvic_walk.core.run.spec_of``: the study's run of the same cell), so ``Run.summary`` equals
 ``simulate --json`` for the same arguments.
 """
 
@@ -16,35 +16,26 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from app.sim.metrics import COLUMN_UNITS, COLUMNS, with_unit
+from controller.analysis import (
+    PAPER_L_LEG,
+    PAPER_L_PEL,
+    PAPER_THETA_PEL_DEG,
+    PAPER_W_STEP,
+    PAPER_Z0,
+)
 from controller.params import ControllerParams
 from pelvic_walk import _params
 from pelvic_walk._plots import differing_params, labels, param_value
+from pelvic_walk.core.metrics import COLUMN_UNITS, COLUMNS, with_unit
+from pelvic_walk.core.summary import COMPARE_KEYS
 
 if TYPE_CHECKING:
     import pandas as pd
     from matplotlib.figure import Figure
 
-    from app.live.frames import LiveFrame
-    from app.web.recording import HeadlessRecorder
+    from pelvic_walk.core.capture import Capture
+    from pelvic_walk.core.frames import LiveFrame
 
-# compare()'s columns: what the paper compares, then what says whether the walk was sound
-COMPARE_KEYS = (
-    "success",
-    "clean",
-    "fell",
-    "steps_completed",
-    "landing_error_max",
-    "waist_yaw_max_deg",
-    "waist_yaw_rate_max_deg_s",
-    "yaw_momentum_peak",
-    "energy_two_step_mean",
-    "energy_two_step_std",
-    "condition_number_legs_max",
-    "zmp_in_support_ratio",
-    "solver_failures",
-    "strategy_error",
-)
 HORIZON_COLUMNS = (  # Run.horizon(): (column, unit)
     ("t", "s"),
     ("ahead", "s"),
@@ -96,7 +87,7 @@ class Run:
         summary: dict[str, Any],
         columns: dict[str, np.ndarray],
         frames: Sequence[LiveFrame],
-        recorder: HeadlessRecorder,
+        capture: Capture,
     ):
         self.params = params
         self.method = params.method
@@ -104,7 +95,7 @@ class Run:
         self.summary = summary
         self._columns = columns
         self._frames = tuple(frames)
-        self._recorder = recorder
+        self._capture = capture
         self._player: Player | None = None
 
     # -- numbers ---------------------------------------------------------------------------
@@ -163,7 +154,7 @@ class Run:
     @property
     def command(self) -> str:
         """The ``pelvic-walk simulate`` command line that makes the same run."""
-        from app.runs import spec_of
+        from pelvic_walk.core.run import spec_of
 
         return spec_of(self.params, self.seed).command()
 
@@ -185,9 +176,9 @@ class Run:
         """The run's 3-D scene as the recording's page plays it (viser's client in one
         self-contained page: no server, no internet); shows itself in a notebook."""
         if self._player is None:
-            from app.web import recording
+            from app.web import recording  # the viewer, a face: loaded only here
 
-            rec = self._recorder.recording(f"pelvic_walk.simulate: {self.command}")
+            rec = recording.of_capture(self._capture, f"pelvic_walk.simulate: {self.command}")
             with _quiet():  # the scene's viser server announces itself (rich, in a notebook)
                 page = recording.scene_html(rec)
             self._player = Player(page, rec.duration, self.label)
@@ -312,8 +303,8 @@ def simulate(
     Raises:
         ValueError: a bad value, with the one line the command line prints.
     """
-    from app.runs import run, spec_of, summarize
-    from app.web.recording import HeadlessRecorder
+    from pelvic_walk.core.capture import Capture
+    from pelvic_walk.core.run import run, spec_of, summarize
 
     name = _params.method_of(method, strategy)
     cfg_params = _params.controller_params(
@@ -332,13 +323,13 @@ def simulate(
     if disturbance is not None:
         cfg = dataclasses.replace(cfg, disturbance=float(disturbance))
     cfg = dataclasses.replace(cfg, backend=backend)
-    recorder = HeadlessRecorder(name)
-    session = run(cfg, on_tick=recorder.capture)
+    capture = Capture(name)
+    session = run(cfg, on_tick=capture.capture)
     summary = summarize(session)
     columns = {c: session.series.column(c) for c in COLUMNS}
     # on the 5 ms grid to the microsecond (a sum of periods drifts by 1e-15): == 2.0 finds a tick
     columns["t"] = np.round(columns["t"], 6)
-    return Run(cfg.params, seed, summary, columns, recorder.frames, recorder)
+    return Run(cfg.params, seed, summary, columns, capture.frames, capture)
 
 
 def compare(runs: Iterable[Run], keys: Sequence[str] | None = None) -> pd.DataFrame:
@@ -366,11 +357,11 @@ def compare(runs: Iterable[Run], keys: Sequence[str] | None = None) -> pd.DataFr
 
 
 def analyze(
-    l_leg: float = 0.75,
-    z0: float = 0.68,
-    l_pel: float = 0.21,
-    w_step: float = 0.243,
-    theta_pel_deg: float = 45.0,
+    l_leg: float = PAPER_L_LEG,
+    z0: float = PAPER_Z0,
+    l_pel: float = PAPER_L_PEL,
+    w_step: float = PAPER_W_STEP,
+    theta_pel_deg: float = PAPER_THETA_PEL_DEG,
     rule: str = "paper",
 ) -> dict[str, float]:
     """The kinematic analysis of eq. (1)-(5) (``pelvic-walk analyze``): the longest step

@@ -1,5 +1,5 @@
 """A parameter grid over methods from Python, on the engine of ``pelvic-walk sweep``
-(``app/sweep/``): the same grid checks, tasks, backends (process pool, Ray, in-process) and
+(``pelvic_walk/core``): the same grid checks, tasks, backends (process pool, Ray, in-process) and
 rows."""
 
 from __future__ import annotations
@@ -56,12 +56,11 @@ def sweep(
     Raises:
         ValueError: a bad grid or method, one line (``pelvic-walk sweep``'s).
     """
-    from app.sweep import output
-    from app.sweep.cli import check_out, check_runs
-    from app.sweep.engine import make_backend, run_tasks
-    from app.sweep.grid import make_grid
-    from app.sweep.measure import make_tasks
     from pelvic_walk._run import pandas
+    from pelvic_walk.core import sweep_output as output
+    from pelvic_walk.core.engine import make_backend, run_tasks
+    from pelvic_walk.core.grid import make_grid
+    from pelvic_walk.core.measure import check_runs, make_tasks
 
     pd = pandas()
     names = None
@@ -96,7 +95,7 @@ def sweep(
     if local:
         jobs = 1
     if out is not None:
-        problem = check_out(Path(out))
+        problem = output.check_out(Path(out))
         if problem:
             raise ValueError(problem.replace("--out ", "out="))
     tasks = make_tasks(grid.cells(), grid.methods, grid.measure)

@@ -27,7 +27,7 @@ import httpx
 import numpy as np
 import pytest
 
-from app.local_server import free_port, local_server
+from app.bench.local_server import free_port, local_server
 
 CHROMIUM = "/usr/bin/chromium"
 ROOT = Path(__file__).resolve().parents[1]

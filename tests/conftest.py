@@ -70,8 +70,8 @@ def pytest_xdist_make_scheduler(config, log):
 @pytest.fixture(scope="session", autouse=True)
 def _own_state_dir(tmp_path_factory):
     """Tests never write into the user's state: XDG_STATE_HOME (where `experiments` records
-    the reports `/report` shows, app/report_dir.py) points at a folder of this test session,
-    for this process and the servers and studies it starts."""
+    the reports `/report` shows, pelvic_walk/core/report_dir.py) points at a folder of this
+    test session, for this process and the servers and studies it starts."""
     with pytest.MonkeyPatch.context() as mp:
         mp.setenv("XDG_STATE_HOME", str(tmp_path_factory.mktemp("xdg-state")))
         yield
@@ -120,7 +120,7 @@ def _served_in_thread(app) -> Iterator[str]:
 
     import uvicorn
 
-    from app.local_server import free_port
+    from app.bench.local_server import free_port
 
     port = free_port()
     server = uvicorn.Server(uvicorn.Config(app, host="127.0.0.1", port=port, log_level="warning"))

@@ -81,9 +81,9 @@ def test_the_lessons_quote_the_reference_report():
     import json
 
     from app.experiments import paper
-    from app.report_dir import reference_report_dir
     from app.web import lesson_numbers
     from app.web.lessons import CLEAN_LIMIT_M, LESSONS, PAPER_LIMIT_M, PRESETS
+    from pelvic_walk.core.report_dir import reference_report_dir
 
     data = json.loads((reference_report_dir() / "results.json").read_text())
     assert CLEAN_LIMIT_M == {m: d["longest_clean"] for m, d in data["max_step"].items()}

@@ -10,10 +10,10 @@ import pytest
 from fastapi.testclient import TestClient
 
 from app.live import LiveSim
-from app.runs import SUMMARY_KEYS
 from app.web.addresses import ClientAddresses
 from app.web.api import create_app
 from controller.params import ControllerParams
+from pelvic_walk.core.run import SUMMARY_KEYS
 
 DT = ControllerParams().control_dt
 
@@ -295,7 +295,7 @@ def test_run_manager_is_bounded():
     API); the instructor (client None) is beyond both; old records pruned."""
     import threading
 
-    from app.web.api.runs import RunBusy, RunManager
+    from app.web.api.headless import RunBusy, RunManager
     from controller.params import ControllerParams
 
     params = ControllerParams()
@@ -389,7 +389,7 @@ def test_docs_assets_are_served_locally(client):
 
 def _outside_temp(monkeypatch, tmp_path):
     """Folders under ``tmp_path/home`` count as the user's own (not temporary) here."""
-    import app.report_dir as report_dir
+    import pelvic_walk.core.report_dir as report_dir
 
     home = tmp_path / "home"
     monkeypatch.setattr(report_dir, "is_temporary", lambda p: home not in Path(p).parents)
@@ -397,7 +397,7 @@ def _outside_temp(monkeypatch, tmp_path):
 
 
 def test_report_shows_the_reference_unless_the_user_wrote_one(live, tmp_path, monkeypatch):
-    from app.report_dir import record_report_dir, reference_report_dir
+    from pelvic_walk.core.report_dir import record_report_dir, reference_report_dir
 
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
     home = _outside_temp(monkeypatch, tmp_path)
@@ -453,7 +453,7 @@ def test_report_dir_option(live, tmp_path, monkeypatch):
 def test_tests_write_nothing_into_the_users_state():
     """The session-wide fixture of tests/conftest.py points XDG_STATE_HOME at a folder of the
     test session, so no test's `experiments` run lands in the user's ~/.local/state."""
-    from app.report_dir import state_file
+    from pelvic_walk.core.report_dir import state_file
 
     home_state = Path.home() / ".local" / "state"
     assert home_state not in state_file().parents
@@ -611,7 +611,7 @@ def test_a_served_tool_never_logs_the_token(tmp_path):
     bearer credential, right and wrong, and the token is in none of the tool's output."""
     import httpx
 
-    from app.local_server import local_server
+    from app.bench.local_server import local_server
 
     env = {**os.environ, "PELVIC_WALK_INSTRUCTOR_TOKEN": TOKEN, "PELVIC_WALK_DISPLAY_NICE": "0"}
     with local_server(("--workers", "0"), env=env) as server:
@@ -834,7 +834,7 @@ def test_one_client_cannot_fill_everyones_run_queue(live):
     untrusted peer is ignored, from the trusted proxy it names the client."""
     import threading
 
-    from app.web.api.runs import RunManager
+    from app.web.api.headless import RunManager
     from app.web.auth import Instructor
 
     runs = RunManager(per_client=2, max_pending=8)

@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from app.bench import BACKENDS, QP_LAYERS, main, urdf_from_mjcf
+from app.bench.timings import BACKENDS, QP_LAYERS, main, urdf_from_mjcf
 
 INTERFACE_KEYS = (
     "tick_ms_median",
@@ -120,7 +120,7 @@ def test_the_peer_replans_over_a_fixed_horizon():
     """placo's loop plans a few steps ahead at every re-plan, as placo's walk example does, not
     the whole walk: a run five times longer re-plans more often over the same horizon and walks
     on (timings are the bench's business, not checked). Needs an interpreter with placo."""
-    from app.bench import peer_loop, peer_python
+    from app.bench.timings import peer_loop, peer_python
 
     if peer_python() is None:
         pytest.skip("no interpreter with placo (make peers)")

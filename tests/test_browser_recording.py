@@ -19,7 +19,7 @@ from browser_util import ARTIFACTS, CHROME_ARGS, CHROMIUM, close_notice, needs_c
 from PIL import Image
 
 from app.cli import main
-from app.methods import METHOD_INFO
+from pelvic_walk.core.methods import METHOD_INFO
 
 pytestmark = needs_chromium
 PAUSE_JS = """() => {

@@ -9,8 +9,8 @@ import sys
 import pytest
 
 from app.cli import main
-from app.runs import SUMMARY_KEYS
-from app.sim.summary import TIMING_KEYS
+from pelvic_walk.core.run import SUMMARY_KEYS
+from pelvic_walk.core.summary import TIMING_KEYS
 
 BAD = [
     ["simulate", "--method", "fixed", "--step-length", "0"],
@@ -93,7 +93,7 @@ def _simulate(tmp_path, *extra: str, length: str = "0.3", steps: str = "3") -> d
 def test_simulate_seed_runs_the_studys_repeat(tmp_path):
     """`simulate --seed N` is the study's repeat N of the same cell: every summary key equal."""
     from app.experiments.worker import execute
-    from app.run_spec import RunSpec
+    from pelvic_walk.core.run_spec import RunSpec
 
     cli = _simulate(tmp_path, "--seed", "4", "--set", "pelvis.k_pel=0.3")
     spec = RunSpec("mpc", 0.3, 3, True, 4, (("pelvis.k_pel", 0.3),))
@@ -123,7 +123,7 @@ def test_a_seeded_api_run_is_the_clis_run(tmp_path):
     """POST /api/runs with a seed runs what `simulate --seed` runs (the study's repeat)."""
     import time
 
-    from app.web.api.runs import RunManager
+    from app.web.api.headless import RunManager
     from controller.params import ControllerParams
 
     cli = _simulate(tmp_path, "--seed", "2", steps="2")
@@ -157,10 +157,11 @@ def test_method_lists_take_commas_or_spaces(argv, want):
 
 
 def test_sweep_lists_take_commas_or_spaces():
-    from app.sweep.cli import build_parser, grid_from_args
+    from app.cli import build_parser
+    from app.cli.sweep import grid_from_args
 
     grids = [
-        grid_from_args(build_parser().parse_args(argv))
+        grid_from_args(build_parser().parse_args(["sweep", *argv]))
         for argv in (
             ["--set", "walk.dsp_ratio=0.1,0.2", "--methods", "fixed,mpc", "--measure", "summary"],
             ["--set", "walk.dsp_ratio=0.1", "0.2", "--methods", "fixed", "mpc"],

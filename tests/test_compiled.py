@@ -17,11 +17,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.runs import RunConfig, run, summarize
-from app.sim.summary import MISSED_FOOTHOLDS, SOLVER_FAILURES, TIMING_KEYS
 from controller import compiled
 from controller.params import ControllerParams
 from controller.qp import QP, QpSolver, frozen
+from pelvic_walk.core.run import RunConfig, run, summarize
+from pelvic_walk.core.summary import MISSED_FOOTHOLDS, SOLVER_FAILURES, TIMING_KEYS
 
 ROOT = Path(__file__).resolve().parents[1]
 TIMING = set(TIMING_KEYS)

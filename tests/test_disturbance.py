@@ -4,8 +4,8 @@ different energy means, and one seed gives the same run twice."""
 from __future__ import annotations
 
 from app.experiments.definitions import DISTURBANCE, DISTURBANCE_PERIOD, RunSpec
-from app.runs import RunConfig, Session, run, summarize
 from controller.params import ControllerParams
+from pelvic_walk.core.run import RunConfig, Session, run, summarize
 
 PARAMS = ControllerParams().replace(method="mpc", walk={"step_length": 0.2, "n_steps": 3})
 

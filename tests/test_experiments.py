@@ -308,7 +308,7 @@ def test_a_runs_command_is_a_valid_simulate_command():
     import shlex
 
     from app.cli import build_parser
-    from app.params_cli import params_from_args
+    from app.cli.options import params_from_args
 
     spec = RunSpec("mpc", 0.35, 20, False, 7, (("pelvis.k_pel", 0.45), ("walk.dsp_ratio", 0.3)))
     argv = shlex.split(spec.command())

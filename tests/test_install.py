@@ -23,7 +23,7 @@ from pathlib import Path
 import httpx
 import pytest
 
-from app.local_server import local_server
+from app.bench.local_server import local_server
 
 ROOT = Path(__file__).resolve().parents[1]
 CODE = ("app", "controller", "models", "pelvic_walk")  # the Python packages' top directories

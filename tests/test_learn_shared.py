@@ -19,9 +19,9 @@ def class_views():
     """A live session and three views on it: the instructor's and two students'."""
     import viser
 
+    from app.bench.local_server import free_port
     from app.live import LiveSim
     from app.live.registry import SessionRegistry
-    from app.local_server import free_port
     from app.web.view import View
     from controller.params import ControllerParams
 

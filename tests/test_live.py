@@ -466,7 +466,7 @@ def test_robots_built_late_stand_by_and_start_in_phase():
 
 
 def test_the_time_base_moves_only_for_a_loop_that_ran_late():
-    from app.live.frames import LiveFrame
+    from pelvic_walk.core.frames import LiveFrame
 
     now = [100.0]
     sim = LiveSim(short_params(3), methods=["mpc"], clock=lambda: now[0])

@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from app.loadtest import CpuMeter, cpu_summary, format_report, run_loadtest
+from app.bench.loadtest import CpuMeter, cpu_summary, format_report, run_loadtest
 
 
 def test_a_short_load_reports_real_time_bytes_and_memory():

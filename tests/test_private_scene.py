@@ -22,7 +22,7 @@ import websockets
 from viser import __version__ as viser_version
 from viser import _messages
 
-from app.local_server import local_server
+from app.bench.local_server import local_server
 from app.web.auth import SEAT_COOKIE
 
 WAIT_S = 90.0  # [s] generous: a busy 2-core machine

@@ -1,4 +1,4 @@
-"""The push study (app/pushes.py) and the push API's refusals.
+"""The push study (pelvic_walk/core/pushes.py) and the push API's refusals.
 
 Short walks (4 steps, pushed in the third) keep the file fast; the README's table comes from
 ``pelvic-walk push-study`` with the full defaults.
@@ -9,11 +9,11 @@ from __future__ import annotations
 import mujoco
 import pytest
 
-import app.pushes as pushes
+import pelvic_walk.core.pushes as pushes
 from app.cli import main as cli_main
 from app.live.intent import PUSH_FORCE_MAX
-from app.sim.world import World
 from controller.strategy import BUILTINS as METHODS
+from pelvic_walk.core.world import World
 
 SHORT = {"n_steps": 4, "step": 2}  # push mid-SSP of the third step, two more to recover
 MASS = mujoco.mj_getTotalmass(World().model)  # [kg]

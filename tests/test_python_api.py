@@ -13,9 +13,9 @@ import pytest
 
 import pelvic_walk as pw
 from app.cli import main
-from app.sim.metrics import COLUMNS
-from app.sim.summary import SUMMARY_KEYS, TIMING_KEYS
 from controller import strategy
+from pelvic_walk.core.metrics import COLUMNS
+from pelvic_walk.core.summary import SUMMARY_KEYS, TIMING_KEYS
 
 
 def _cli_summary(tmp_path, *argv: str) -> dict:
@@ -250,7 +250,7 @@ def served():
     """``pelvic-walk serve`` with an instructor and private sessions, on free loopback ports."""
     import os
 
-    from app.local_server import local_server
+    from app.bench.local_server import local_server
 
     env = {**os.environ, "PELVIC_WALK_DISPLAY_NICE": "0"}
     args = ("--instructor-token", TOKEN, "--sessions", "private", "--methods", "fixed", "mpc")
@@ -336,7 +336,7 @@ def test_client_drives_a_served_tool_and_raises_the_apis_refusals(served):
 
 
 def test_client_says_when_nothing_answers():
-    from app.local_server import free_port
+    from app.bench.local_server import free_port
 
     with pytest.raises(ConnectionError, match="no pelvic-walk server answers"):
         pw.Client(f"http://127.0.0.1:{free_port()}", timeout=2).state()

@@ -69,7 +69,7 @@ def test_daqp_from_compiled_code_equals_daqps_own_interface():
     """The solver calls DAQP's C functions from a kernel, on its own structures (the layouts
     of DAQP's headers): over a walk's QPs of every layer, warm starts, matrix and sense
     updates included, its solutions equal daqp.Model's bit for bit."""
-    from app.bench import record_qps
+    from app.bench.timings import record_qps
 
     for layer, qps in record_qps(300).items():
         solver = QpSolver("daqp")

@@ -5,13 +5,13 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from app.report_dir import (
+from app.web.report_page import markdown_to_html, render_report_page, report_url
+from pelvic_walk.core.report_dir import (
     latest_report_dir,
     record_report_dir,
     reference_report_dir,
     state_file,
 )
-from app.web.report_page import markdown_to_html, render_report_page, report_url
 
 TABLE = """
 | length [m] | method | peak \\|d rate/dt\\| [deg/s^2] | verdict |
@@ -71,9 +71,11 @@ def test_no_report_yet(tmp_path):
 def _users_own(monkeypatch, home: Path) -> None:
     """Folders under ``home`` count as the user's own here (tmp_path is a temporary folder,
     whose reports are neither recorded nor shown)."""
-    import app.report_dir
+    import pelvic_walk.core.report_dir
 
-    monkeypatch.setattr(app.report_dir, "is_temporary", lambda p: home not in Path(p).parents)
+    monkeypatch.setattr(
+        pelvic_walk.core.report_dir, "is_temporary", lambda p: home not in Path(p).parents
+    )
 
 
 def test_the_latest_written_report_is_remembered(tmp_path, monkeypatch):
@@ -110,7 +112,7 @@ def test_reports_in_temporary_folders_are_neither_recorded_nor_shown(tmp_path, m
     what /report shows."""
     import tempfile
 
-    from app.report_dir import choose_report, is_temporary
+    from pelvic_walk.core.report_dir import choose_report, is_temporary
 
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
     assert is_temporary(tmp_path) and is_temporary(Path(tempfile.gettempdir()) / "x")

@@ -29,7 +29,7 @@ from app.experiments.runs import RunSummary, case_key, failure_reasons, length_k
 from app.experiments.sensitivity import SensitivityRow, SensitivitySection, effective, reads
 from app.experiments.waist import LateralCase, LateralSection, WaistSection, sine_share
 from app.experiments.yaw import YawSection
-from app.sim.world import JOINTS
+from pelvic_walk.core.world import JOINTS
 
 METHODS = ("fixed", "redundancy", "mpc")
 K, D = "pelvis.k_pel", "walk.dsp_ratio"

@@ -8,8 +8,8 @@ import mujoco
 import numpy as np
 import viser.transforms as vtf
 
-from app.sim.world import World
 from app.web.robot_meshes import RobotMeshes
+from pelvic_walk.core.world import World
 
 
 class _Handle:

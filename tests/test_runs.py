@@ -7,9 +7,9 @@ import threading
 import time
 
 from app.live import LiveSim
-from app.runs import RunConfig, run, summarize
-from app.sim.summary import TIMING_KEYS
 from controller.params import ControllerParams
+from pelvic_walk.core.run import RunConfig, run, summarize
+from pelvic_walk.core.summary import TIMING_KEYS
 
 
 def _same(a, b, path="summary") -> None:
@@ -83,7 +83,7 @@ def test_the_lipm_zmp_reads_this_periods_com_velocity():
     import mujoco
     import numpy as np
 
-    from app.runs import Session
+    from pelvic_walk.core.run import Session
 
     params = ControllerParams().replace(method="mpc", walk={"step_length": 0.3, "n_steps": 2})
     session = Session(RunConfig(params=params))

@@ -21,9 +21,9 @@ import numpy as np
 import pytest
 import viser
 
+from app.bench.local_server import free_port
 from app.live.loop import LiveLoop
 from app.live.session import initial_intent
-from app.local_server import free_port
 from app.web.scene import LAYERS, SceneView, label_text
 from controller.params import ControllerParams
 from models.dyros_jet import SCENE_XML

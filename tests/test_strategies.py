@@ -18,10 +18,10 @@ from app.cli import main as cli_main
 from app.live import FALL_HOLD_S, LiveSim
 from app.live.pool import WorkerPool
 from app.live.session import initial_intent
-from app.runs import run, summarize
-from app.sim.session import RunConfig
 from controller import strategy
 from controller.params import ControllerParams
+from pelvic_walk.core.run import run, summarize
+from pelvic_walk.core.session import RunConfig
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -1,7 +1,7 @@
 """The study's and the sweep's modules are named by concept and import each other in one
 direction: no ``*_more.py``, no module importing another's private names, no import circle
-among ``app/experiments`` and ``app/sweep`` modules, and the sweep never imports the study
-(``experiments`` runs on the sweep's engine, not the other way round)."""
+among ``app/experiments`` and the core's (``pelvic_walk/core``) modules, and the core never
+imports the study (``experiments`` runs on the core's engine, not the other way round)."""
 
 from __future__ import annotations
 
@@ -9,7 +9,7 @@ import ast
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-PACKAGES = ("app/experiments", "app/sweep")
+PACKAGES = ("app/experiments", "pelvic_walk/core")
 
 
 def _modules() -> dict[str, Path]:
@@ -56,7 +56,7 @@ def test_no_module_imports_another_modules_private_names():
         (m, target, n)
         for m, path in mods.items()
         for target, names in _imports(path)
-        if target.startswith("app.")
+        if target.startswith(("app.", "pelvic_walk.core"))
         for n in names
         if n.startswith("_") and not n.startswith("__")
     ]
@@ -80,7 +80,7 @@ def test_no_import_circle():
         visit(m, [])
 
 
-def test_the_sweep_never_imports_the_study():
+def test_the_core_never_imports_the_study():
     graph = _graph()
-    sweep = [m for m in graph if m.startswith("app.sweep")]
+    sweep = [m for m in graph if m.startswith("pelvic_walk.core")]
     assert not [(m, n) for m in sweep for n in graph[m] if n.startswith("app.experiments")]

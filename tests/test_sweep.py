@@ -1,4 +1,5 @@
-"""``pelvic-walk sweep`` (``app.sweep``): grids, the limit search, the table, the backends.
+"""``pelvic-walk sweep`` (``app/cli/sweep.py`` on ``pelvic_walk.core``): grids, the limit search,
+the table, the backends.
 
 Fast: grid parsing and expansion (``--set`` and files, every parameter of params.py), bad
 arguments (exit 2, one line), the limit search on fake outcomes (monotonic and not), the
@@ -21,13 +22,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from app.params_cli import fields
-from app.sim.summary import SUMMARY_KEYS
-from app.sweep import output
-from app.sweep.cli import main
-from app.sweep.engine import InProcess, OneJob, run_tasks
-from app.sweep.grid import grid_from_file, make_grid, parse_sets
-from app.sweep.measure import (
+from app.cli import main as cli_main
+from controller.strategy import BUILTINS as METHODS
+from pelvic_walk.core import sweep_output as output
+from pelvic_walk.core.engine import InProcess, OneJob, run_tasks
+from pelvic_walk.core.grid import grid_from_file, make_grid, parse_sets
+from pelvic_walk.core.measure import (
     LIMIT_COLUMNS,
     OUTCOMES,
     LimitSearch,
@@ -38,7 +38,8 @@ from app.sweep.measure import (
     threshold_of,
     walks,
 )
-from controller.strategy import BUILTINS as METHODS
+from pelvic_walk.core.params import fields
+from pelvic_walk.core.summary import SUMMARY_KEYS
 
 TINY = [
     "--set",
@@ -52,6 +53,11 @@ TINY = [
     "--jobs",
     "2",
 ]
+
+
+def main(argv: list[str]) -> int:
+    """``pelvic-walk sweep ARGV``."""
+    return cli_main(["sweep", *argv])
 
 
 def _call(argv: list[str]) -> int:
@@ -219,9 +225,18 @@ def test_an_out_that_is_a_file_exits_2(tmp_path, capsys):
     assert "is a file" in capsys.readouterr().err
 
 
-def test_python_m_app_sweep_reports_without_traceback(tmp_path):
+def test_python_m_app_cli_sweep_reports_without_traceback(tmp_path):
     proc = subprocess.run(
-        [sys.executable, "-m", "app.sweep", "--set", "pelvis.k_pel=2", "--out", str(tmp_path)],
+        [
+            sys.executable,
+            "-m",
+            "app.cli",
+            "sweep",
+            "--set",
+            "pelvis.k_pel=2",
+            "--out",
+            str(tmp_path),
+        ],
         capture_output=True,
         text=True,
         timeout=300,
@@ -240,15 +255,16 @@ def test_missing_ray_is_one_line(tmp_path, capsys, monkeypatch):
 
 
 def _grid_of(argv: list[str]):
-    from app.sweep.cli import build_parser, grid_from_args
+    from app.cli import build_parser
+    from app.cli.sweep import grid_from_args
 
-    return grid_from_args(build_parser().parse_args(argv))
+    return grid_from_args(build_parser().parse_args(["sweep", *argv]))
 
 
 def test_lists_take_commas_or_spaces_alike():
     """``--methods fixed mpc`` = ``--methods fixed,mpc``; ``--set X=0.1,0.2`` = ``--set X=0.1
     0.2``, and one --set may carry several assignments."""
-    from app.params_cli import split_list
+    from pelvic_walk.core.params import split_list
 
     assert split_list(["fixed,mpc"]) == split_list(["fixed", "mpc"]) == ["fixed", "mpc"]
     assert split_list(["fixed,", "mpc"]) == split_list([" fixed , mpc "]) == ["fixed", "mpc"]
@@ -409,7 +425,7 @@ def test_one_search_brackets_the_clean_limit_at_every_threshold():
     """A landing error of 1-4 cm and a kappa(legs) bound of 300-3000, from the same runs: each
     limit is the longest length passing that criterion, found in far fewer runs than one
     search per threshold."""
-    from app.sweep.grid import Cell
+    from pelvic_walk.core.grid import Cell
 
     tests = criteria(landings=(0.01, 0.02, 0.03, 0.04), kappas=(300.0, 1000.0, 3000.0))
     assert list(tests) == [
@@ -565,7 +581,7 @@ def _fake_summary(spec):
 
 
 def test_a_2d_summary_sweep_end_to_end_on_a_fake_run(tmp_path, monkeypatch, capsys):
-    from app.sweep import engine, measure
+    from pelvic_walk.core import engine, measure
 
     real = measure.make_tasks
     monkeypatch.setattr(engine, "make_backend", lambda ray, jobs, n: InProcess())

@@ -9,8 +9,8 @@ import re
 import viser
 from fastapi.testclient import TestClient
 
+from app.bench.local_server import free_port
 from app.live.registry import SessionRegistry
-from app.local_server import free_port
 from app.web.api import create_app
 from app.web.auth import Instructor
 from app.web.lessons import LESSONS

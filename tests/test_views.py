@@ -196,9 +196,9 @@ def panel_view():
     import viser
     from fastapi.testclient import TestClient
 
+    from app.bench.local_server import free_port
     from app.live import LiveSim
     from app.live.registry import SessionRegistry
-    from app.local_server import free_port
     from app.web.api import create_app
     from app.web.view import View
     from controller.params import ControllerParams
@@ -365,8 +365,8 @@ def test_a_students_panel_is_read_only_and_says_why(panel_view, monkeypatch):
 
     import viser
 
+    from app.bench.local_server import free_port
     from app.live.registry import SessionRegistry
-    from app.local_server import free_port
     from app.web.lessons import PRESETS
     from app.web.panel import READ_ONLY_NOTE, REFUSED
     from app.web.view import View

@@ -8,11 +8,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.run_spec import RunSpec
-from app.runs import SUMMARY_KEYS, RunConfig, Session, run, summarize
+from controller.footsteps import LEFT, RIGHT
 from controller.params import ControllerParams
+from pelvic_walk.core.run import SUMMARY_KEYS, RunConfig, Session, run, summarize
+from pelvic_walk.core.run_spec import RunSpec
 
 ROOT = Path(__file__).resolve().parents[1]
+SIDE = {LEFT: "left", RIGHT: "right"}  # StrategyInputs.support and .swing
 
 
 def _params(method: str, length: float = 0.2, steps: int = 3, arms: bool = True):
@@ -52,6 +54,42 @@ def test_mpc_pins_the_ik_waist_rate_to_the_pelvic_mpc():
     rates = np.array(rates)
     assert np.max(np.abs(rates[:, 1])) > 0.05  # the MPC does turn the pelvis
     np.testing.assert_allclose(rates[:, 0], rates[:, 1], atol=1e-6)
+
+
+def test_the_strategy_reads_each_input_under_its_own_name(monkeypatch):
+    """The tick builds StrategyInputs by field name: each field is what the tick's output
+    calls by that name (two inputs of one shape swapped, e.g. the soles, would still run)."""
+    session = Session(RunConfig(params=_params("mpc", 0.3, 2)))
+    walker = session.walker
+    mpc = walker.strategy.strategy
+    seen = []
+    rate = mpc.waist_rate
+    monkeypatch.setattr(mpc, "waist_rate", lambda s: seen.append(s) or rate(s))
+    theta, theta_dot = float(walker.q_cmd[0]), 0.0  # the commanded waist before the tick
+    phases = set()
+    for _ in range(600):  # the stand, then two steps' double and single supports
+        out = session.tick()
+        s, plan = seen[-1], out.plan_sample
+        assert (s.t, s.dt, s.theta, s.theta_dot) == (out.t, 0.005, theta, theta_dot)
+        assert s.theta_ref is out.theta_ref and s.com is out.com_plan.com
+        assert s.com_now is out.p_world_com_des
+        np.testing.assert_array_equal(out.t + s.horizon_t, out.com_plan.times)
+        for got, want in [
+            (s.left_sole, plan.p_left[2:]),
+            (s.right_sole, plan.p_right[2:]),
+            (s.left_sole_now, plan.p_left[0]),
+            (s.right_sole_now, plan.p_right[0]),
+        ]:
+            np.testing.assert_array_equal(got, want)
+        assert s.support == (SIDE[int(plan.support_side[0])] if out.in_ssp else "both")
+        assert s.swing == SIDE.get(out.swing_side)
+        assert (s.step, s.phase) == (out.step_index, plan.s_ssp[0])
+        assert s.params is walker.params
+        assert not any(a.flags.writeable for a in s if isinstance(a, np.ndarray))
+        theta, theta_dot = out.waist_angle, out.waist_rate
+        phases.add(s.support)
+    assert phases == {"both", "left", "right"} and s.step == 1
+    assert s.left_sole_now[1] > s.right_sole_now[1]  # the soles are told apart
 
 
 def test_mpc_turns_the_pelvis_toward_the_forward_foot():
@@ -175,7 +213,7 @@ def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
     assert s["solver_failures_by_layer"][name] == 10
     assert s["solver_failures"] == 10
     assert not s["fell"]
-    # 10 failed ticks of about 1400: within the share a success allows (app.sim.summary)
+    # 10 failed ticks of about 1400: within the share a success allows (pelvic_walk.core.summary)
     assert s["solver_failure_share"] == 10 / session.walker.ticks < 0.01 and s["success"]
 
 

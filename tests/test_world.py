@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from app.sim.world import World, convex_hull, point_in_polygon, polygon_margin
+from pelvic_walk.core.world import World, convex_hull, point_in_polygon, polygon_margin
 
 
 def test_convex_hull_and_point_in_polygon():

@@ -4,9 +4,9 @@ Where each thing is:
 
 - ``paper``: the paper's numbers, typed once (Table 1, the limits, the kinematics, ...).
 - ``definitions``: what runs, as data (:class:`Study`, the sensitivity grid and the pushes);
-  a run is an ``app.run_spec.RunSpec``.
+  a run is an ``pelvic_walk.core.run_spec.RunSpec``.
 - ``worker``: one run in a worker process -> a small typed result (``runs``).
-- ``runner``: every run on the run engine (``app.sweep.engine``: local process pool or Ray),
+- ``runner``: every run on the run engine (``pelvic_walk.core.engine``: local process pool or Ray),
   then ``analysis``, the figures, ``results.json`` and ``report.md``.
 - ``runs``: a run's typed result and how a section reads it; ``results``: the study's
   (:class:`StudyResults`, ``results.json``).

@@ -31,8 +31,8 @@ from app.experiments.limits import figure_lengths_run
 from app.experiments.robustness import PushCell, push_key
 from app.experiments.runs import Results, RunSummary, length_key, step_of, summary_of
 from app.experiments.waist import waist_case
-from app.sweep.measure import walks
 from controller import strategy
+from pelvic_walk.core.measure import walks
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,7 @@ from app.experiments.results import Meta, RunRecord, StudyResults
 from app.experiments.robustness import PushCell
 from app.experiments.runs import Results
 from app.experiments.sensitivity import SensitivitySection, lateral_limits
-from app.run_spec import Override
+from pelvic_walk.core.run_spec import Override
 
 
 def analyse(

@@ -34,8 +34,8 @@ from app.experiments.measures import at_1ms
 from app.experiments.paper import MeanStd
 from app.experiments.results import ClaimResult, StudyResults
 from app.experiments.verdicts import Claim, Rule, above, at_least, at_most, below, is_
-from app.sim.metrics import KAPPA_SINGULAR
 from controller.strategy import FIXED, MPC, REDUNDANCY
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
 
 def evaluate(study: Study, r: StudyResults) -> list[ClaimResult]:

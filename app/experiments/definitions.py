@@ -1,6 +1,7 @@
 """The study, as data: which runs each section needs.
 
-A run is a :class:`~app.run_spec.RunSpec`: method, step length, steps, arm swing, seed, and
+A run is a :class:`~pelvic_walk.core.run_spec.RunSpec`: method, step length, steps, arm swing,
+seed, and
 any other parameter of ``controller/params.py`` as ``("group.name", value)`` overrides.
 Sections ask for runs with the *extracts* they need from each (a summary always; ``"step"``:
 one mid-walk step at full rate; ``"walk"``: the walking phase down-sampled; ``"zmp"``: ZMP and
@@ -10,7 +11,8 @@ sections runs once and carries the union of the extracts.
 The sweep of the longest clean step (section 2) is adaptive: a coarse grid first
 (:attr:`Study.sweep_grid`), then :func:`refinement_runs` fills the gap between each method's
 last clean and first failed length at :attr:`Study.sweep_resolution`. The sensitivity
-section (:class:`Sensitivity`) runs ``app.sweep``'s limit search over a grid of two parameters
+section (:class:`Sensitivity`) runs the core's limit search (``pelvic_walk.core.measure``) over a
+grid of two parameters
 and a few more cells; the robustness section reads Table 1's seeded repeats and adds seeded
 walks under larger pushes (:class:`Falls`) and the largest sideways push each method survives
 in both directions (:class:`Pushes`, ``pelvic-walk push-study``), also in the sensitivity cells
@@ -30,7 +32,10 @@ from pathlib import Path
 from typing import Any
 
 from app.experiments import paper
-from app.run_spec import (
+from controller import strategy
+from controller.params import LATERAL_MODES, ControllerParams
+from controller.strategy import FIXED, MPC, REDUNDANCY
+from pelvic_walk.core.run_spec import (
     DISTURBANCE,
     DISTURBANCE_PERIOD,
     SEED_PERTURBATION,
@@ -38,9 +43,6 @@ from app.run_spec import (
     RunSpec,
     length,
 )
-from controller import strategy
-from controller.params import LATERAL_MODES, ControllerParams
-from controller.strategy import FIXED, MPC, REDUNDANCY
 
 __all__ = [  # the run's own names, for the modules and tests that read them here
     "DISTURBANCE",
@@ -98,7 +100,8 @@ class Sensitivity:
 
 @dataclass(frozen=True)
 class Pushes:
-    """The largest sideways push each method survives (``app.pushes.largest_survived``), in
+    """The largest sideways push each method survives
+    (``pelvic_walk.core.pushes.largest_survived``), in
     both directions, bracketed to ``resolution``; and the same at ``trade_length`` in the
     sensitivity cells whose gain the report states (the push margin beside the gain)."""
 

@@ -225,7 +225,7 @@ def energy(study: Study, results: Results) -> EnergySection:
                 p = welch_p(cells[a].run_means, cells[b].run_means)
                 if p is not None:
                     p_values[f"{length_key(x)}:{a}-{b}"] = p
-    from app.sim.world import JOINTS
+    from pelvic_walk.core.world import JOINTS
 
     return EnergySection(
         table,

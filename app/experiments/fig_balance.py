@@ -12,9 +12,9 @@ from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, zmp_of
-from app.methods import method_hex
 from controller.strategy import MPC
 from models.dyros_jet import FOOT_SIZE
+from pelvic_walk.core.methods import method_hex
 
 
 def fig_zmp(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:

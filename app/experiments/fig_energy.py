@@ -13,7 +13,7 @@ from app.experiments.energy import JOINT_GROUPS, joint_groups
 from app.experiments.fig_style import finish, label, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, length_key
-from app.methods import method_hex
+from pelvic_walk.core.methods import method_hex
 
 
 def fig_energy(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:

@@ -9,10 +9,10 @@ from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, label, plt, shade_dsp
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, step_of
-from app.methods import method_hex
-from app.sim.metrics import KAPPA_SINGULAR
 from controller.kinematics import KAPPA_CAP
 from controller.strategy import FIXED
+from pelvic_walk.core.methods import method_hex
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
 
 def _limit_tag(r: StudyResults, x: float) -> str:

@@ -10,7 +10,7 @@ from app.experiments.definitions import Study
 from app.experiments.fig_style import label, plt, save
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results
-from app.methods import method_hex
+from pelvic_walk.core.methods import method_hex
 
 
 def fig_max_step(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:

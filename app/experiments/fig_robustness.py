@@ -13,9 +13,9 @@ from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, label, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, case_key
-from app.methods import method_hex
-from app.run_spec import DISTURBANCE
-from app.sim.metrics import LANDING_ERROR_CLEAN
+from pelvic_walk.core.methods import method_hex
+from pelvic_walk.core.metrics import LANDING_ERROR_CLEAN
+from pelvic_walk.core.run_spec import DISTURBANCE
 
 
 def fig_robustness(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:

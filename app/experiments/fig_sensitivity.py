@@ -128,7 +128,7 @@ def fig_thresholds(study: Study, results: Results, r: StudyResults, path: Path) 
 
 
 def _criterion_words(c: str) -> str:
-    from app.sweep.measure import threshold_of
+    from pelvic_walk.core.measure import threshold_of
 
     landing, kappa = threshold_of(c)
     return f"clean: landing < {landing * 100:g} cm,\nkappa(legs) < {kappa:g}"

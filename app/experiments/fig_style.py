@@ -18,7 +18,7 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
-from app.methods import METHOD_INFO  # noqa: E402
+from pelvic_walk.core.methods import METHOD_INFO  # noqa: E402
 
 DEG = 180.0 / np.pi
 DPI = 110

@@ -9,8 +9,8 @@ from app.experiments.definitions import ROTATING, Study
 from app.experiments.fig_style import DEG, finish, label, plt, shade_dsp
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, step_of
-from app.methods import method_hex
 from controller.strategy import MPC
+from pelvic_walk.core.methods import method_hex
 
 
 def fig_waist(study: Study, results: Results, r: StudyResults, path: Path) -> str | None:

@@ -8,7 +8,7 @@ from app.experiments.definitions import Study
 from app.experiments.fig_style import NO_ARMS_GREY, finish, label, plt
 from app.experiments.results import StudyResults
 from app.experiments.runs import Results, array, case_key, walk_of
-from app.methods import method_hex
+from pelvic_walk.core.methods import method_hex
 
 
 def _yaw_note(r: StudyResults, m: str, x: float) -> str:

@@ -3,7 +3,7 @@ walks (the sweep of step lengths, and the paper's lengths at the same share of e
 
 - *clean* run: ``summary.clean`` (completed, no QP failure, no servo saturation, no
   speed-limited IK tick, every step within 2 cm of its planned foothold, kappa(legs) bounded);
-- *walks*: no fall, the plan completed, every landing within 2 cm (``app.sweep.measure``);
+- *walks*: no fall, the plan completed, every landing within 2 cm (``pelvic_walk.core.measure``);
 - *longest clean step*: the longest length below the method's shortest failing length.
 """
 
@@ -16,8 +16,8 @@ from app.experiments import paper
 from app.experiments.definitions import Study, sweep_bracket
 from app.experiments.paper import KinematicLimits
 from app.experiments.runs import Results, RunSummary, failure_reasons, summary_of
-from app.run_spec import length
-from app.sweep.measure import walks
+from pelvic_walk.core.measure import walks
+from pelvic_walk.core.run_spec import length
 
 
 @dataclass(frozen=True)

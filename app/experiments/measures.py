@@ -24,8 +24,8 @@ from app.experiments.energy import EnergyCell, EnergySection, order_means, order
 from app.experiments.results import StudyResults
 from app.experiments.runs import case_key, length_key
 from app.experiments.waist import sine_share
-from app.sim.metrics import KAPPA_SINGULAR
 from controller.strategy import FIXED, MPC, REDUNDANCY
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
 Measured = dict[str, Any] | None  # None: the runs a claim needs are missing
 Measure = Callable[[Study, StudyResults], Measured]

@@ -37,13 +37,13 @@ from app.experiments.summary import plain, summary_lines, trade_words
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
 from app.experiments.waist import ANTICIPATION_MIN, EARLY_TURN_MIN, sine_share
 from app.experiments.worker import LANDING_WINDOW
-from app.methods import METHOD_INFO
-from app.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
-from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
-from app.sim.session import GRAVITY
-from app.sweep.measure import threshold_of
 from controller.params import LATERAL_MODES, ControllerParams
 from models.dyros_jet import TOTAL_MASS
+from pelvic_walk.core.measure import threshold_of
+from pelvic_walk.core.methods import METHOD_INFO
+from pelvic_walk.core.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from pelvic_walk.core.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
+from pelvic_walk.core.session import GRAVITY
 
 _P = ControllerParams()
 

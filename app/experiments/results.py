@@ -26,8 +26,8 @@ from app.experiments.robustness import RobustnessSection
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.waist import LateralSection, WaistSection
 from app.experiments.yaw import YawSection
-from app.run_spec import RunSpec
-from app.sim.summary import TIMING_KEYS as RUN_TIMING_KEYS
+from pelvic_walk.core.run_spec import RunSpec
+from pelvic_walk.core.summary import TIMING_KEYS as RUN_TIMING_KEYS
 
 # keys whose values measure time or the machine, not the robot: they differ between two runs
 # of the same study (on any backend)
@@ -67,7 +67,7 @@ class Meta:
     cpu_count: int | None
     machine: str
     errors: dict[str, str]
-    backend: str = ""  # where the runs ran (app.sweep.engine)
+    backend: str = ""  # where the runs ran (pelvic_walk.core.engine)
     load_average: float | None = None  # the machine's 1-minute load average at the end
     load_average_start: float | None = None  # ... and when the runs started
     cpu_s: float | None = None  # CPU time of the runs, all processes (local pool only) [s]

@@ -3,7 +3,8 @@ pushes, the largest sideways push it survives, and what the gains of the sensiti
 cost in push margin.
 
 - *Repeats*: Table 1's seeded runs (each pushed through the whole run by a horizontal force
-  on the torso, N(0, 5 N) per axis renewed every 0.1 s; ``app.run_spec``). Per method and
+  on the torso, N(0, 5 N) per axis renewed every 0.1 s; ``pelvic_walk.core.run_spec``). Per method
+  and
   length: the runs that fell, the runs that did not fall but landed a foot more than 2 cm off
   its planned foothold (``LANDING_ERROR_CLEAN``), the worst landing, and the seeds of each
   (``pelvic-walk simulate --seed N`` reruns repeat N).
@@ -11,7 +12,7 @@ cost in push margin.
   larger pushes (:class:`~app.experiments.definitions.Falls`: the same seeded walks with each
   axis N(0, 15 N)). Two methods' counts differ when Fisher's exact test says so
   (:func:`falls_p`, p < :data:`~app.experiments.energy.SIGNIFICANCE`).
-- *Push survival*: ``app.pushes.largest_survived``, the same bisection as ``pelvic-walk
+- *Push survival*: ``pelvic_walk.core.pushes.largest_survived``, the same bisection as ``pelvic-walk
   push-study``: a push on the torso for 0.1 s at the middle of the third step's single
   support, to the left and to the right; the largest force after which the robot still
   completes its plan, bracketed to 2 N. Two methods differ when their brackets do not overlap.
@@ -38,9 +39,9 @@ from app.experiments.definitions import Falls, Pushes, Study
 from app.experiments.energy import SIGNIFICANCE
 from app.experiments.runs import Results, case_key, summary_of
 from app.experiments.sensitivity import SensitivitySection, reads
-from app.run_spec import DISTURBANCE, Override
-from app.sim.metrics import LANDING_ERROR_CLEAN
 from controller.strategy import FIXED, MPC
+from pelvic_walk.core.metrics import LANDING_ERROR_CLEAN
+from pelvic_walk.core.run_spec import DISTURBANCE, Override
 
 
 @dataclass(frozen=True)
@@ -79,7 +80,7 @@ class FallsCell:
 @dataclass(frozen=True)
 class PushCell:
     """The largest push one method survives at one length and direction
-    (``app.pushes.Survival``)."""
+    (``pelvic_walk.core.pushes.Survival``)."""
 
     method: str
     step_length: float  # [m]
@@ -310,9 +311,9 @@ def push_job(
     """One method's push survival at one length and direction (a job of the run engine: plain
     data in and out), with ``overrides`` of any other parameter; ``strategy_file`` is a
     user's strategy this worker loads first."""
-    from app.pushes import largest_survived
-    from app.run_spec import RunSpec
     from controller import strategy
+    from pelvic_walk.core.pushes import largest_survived
+    from pelvic_walk.core.run_spec import RunSpec
 
     if strategy_file is not None:
         strategy.load_file(strategy_file)

@@ -1,8 +1,9 @@
 """``pelvic-walk experiments``: run the study on the run engine and write the report.
 
-The runs go to one backend of ``app.sweep.engine`` (the local process pool by default, or Ray
+The runs go to one backend of ``pelvic_walk.core.engine`` (the local process pool by default, or Ray
 with ``--ray [ADDRESS]``), as jobs of plain data: :func:`worker.execute` on a
-:class:`~app.run_spec.RunSpec` for the study's runs, ``app.sweep.measure.run_one`` for the
+:class:`~pelvic_walk.core.run_spec.RunSpec` for the study's runs,
+``pelvic_walk.core.measure.run_one`` for the
 sensitivity section's limit searches, :func:`robustness.push_job` for the push survival.
 
 Three phases, so the adaptive parts never wait at the end: first the push bisections and every
@@ -39,9 +40,9 @@ from app.experiments.robustness import (
 )
 from app.experiments.runs import Results
 from app.experiments.worker import execute
-from app.run_spec import Override, RunSpec
-from app.sweep.engine import Backend, OneJob, Task, make_backend, run_tasks
 from controller import strategy
+from pelvic_walk.core.engine import Backend, OneJob, Task, make_backend, run_tasks
+from pelvic_walk.core.run_spec import Override, RunSpec
 
 PROG = "pelvic-walk experiments"
 
@@ -232,7 +233,7 @@ def cpu_seconds() -> float:
 def finish(out: Path, study: Study, runs: StudyRuns, meta: Meta, t0: float) -> int:
     """Analyse finished runs, draw the figures, write results.json and report.md."""
     from app.experiments import figures
-    from app.report_dir import record_report_dir
+    from pelvic_walk.core.report_dir import record_report_dir
 
     data = analyse(study, runs.results, meta, runs.sensitivity, runs.pushes, runs.cell_pushes)
     data = dataclasses.replace(

@@ -16,9 +16,9 @@ from typing import Any
 
 import numpy as np
 
-from app.run_spec import RunSpec
-from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
-from app.sim.summary import INCOMPLETE
+from pelvic_walk.core.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from pelvic_walk.core.run_spec import RunSpec
+from pelvic_walk.core.summary import INCOMPLETE
 
 Samples = list[float | None]  # a series as JSON-safe floats (None = NaN / inf)
 
@@ -44,7 +44,8 @@ def array(values: Samples) -> np.ndarray:
 # -- one run --------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class RunSummary:
-    """The summary keys of a run (``app.sim.summary``) the study reads, plus kappa at the step
+    """The summary keys of a run (``pelvic_walk.core.summary``) the study reads, plus kappa at the
+    step
     events and where the centre of pressure sat on a sole's edge.
 
     ``other`` keeps every further key of the run's summary, so ``results.json`` shows them all.
@@ -59,7 +60,7 @@ class RunSummary:
     fell: bool
     fall_time: float | None  # [s]
     fall_reason: str | None
-    clean: bool  # app.sim.summary's criterion, in words: failure_reasons
+    clean: bool  # pelvic_walk.core.summary's criterion, in words: failure_reasons
     landing_error_max: float | None  # [m]
     condition_number_max: float  # kappa(J_low), walking phase
     speed_limited_ticks: int
@@ -85,7 +86,8 @@ class RunSummary:
 
     @classmethod
     def from_run(cls, summary: dict[str, Any], **extra: Any) -> RunSummary:
-        """From ``app.sim.summary.summarize`` (every key kept) and the worker's ``extra`` keys."""
+        """From ``pelvic_walk.core.summary.summarize`` (every key kept) and the worker's ``extra``
+        keys."""
         names = {f.name for f in dataclasses.fields(cls)} - {"other"}
         merged = {**summary, **extra}
         return cls(
@@ -206,7 +208,8 @@ def zmp_of(results: Results, spec: RunSpec) -> ZmpExtract | None:
 
 
 def failure_reasons(s: RunSummary | None) -> list[str]:
-    """What made a run not clean, in words (empty for a clean run); see ``app.sim.summary``'s
+    """What made a run not clean, in words (empty for a clean run); see
+    ``pelvic_walk.core.summary``'s
     criterion."""
     if s is None:
         return ["the run crashed"]
@@ -218,7 +221,7 @@ def failure_reasons(s: RunSummary | None) -> list[str]:
     le = s.landing_error_max
     if le is not None and le >= LANDING_ERROR_CLEAN:
         out.append(f"landing error {le * 100:.1f} cm (limit {LANDING_ERROR_CLEAN * 100:.0f} cm)")
-    legs = s.condition_number_legs_max  # the clean criterion's matrix (app.sim.summary)
+    legs = s.condition_number_legs_max  # the clean criterion's matrix (pelvic_walk.core.summary)
     if legs is not None and legs >= KAPPA_SINGULAR:
         out.append(
             f"a knee nearly straight: kappa(legs) up to {legs:.3g} (limit {KAPPA_SINGULAR:.0f})"

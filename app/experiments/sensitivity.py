@@ -1,12 +1,13 @@
 """Section 8: where the paper's +0.10 m of pelvic rotation appears on our model.
 
-The longest step that walks and the longest clean one (``app.sweep``'s limit search, the same
+The longest step that walks and the longest clean one (the core's limit search
+(``pelvic_walk.core.measure``), the same
 as ``pelvic-walk sweep --measure limit``), for the fixed pelvis and the MPC, over a grid of
 two parameters (:class:`~app.experiments.definitions.Sensitivity`: k_pel x the DSP share) and
 a few more cells (the authors' DSP and step width, the step time, the lateral distance's
 readings). Each search brackets the clean limit at the default thresholds (landing within
 2 cm, kappa(legs) below 1000) and with one threshold changed
-(``app.sweep.measure.criteria``), from the same runs, and keeps every run's outcome.
+(``pelvic_walk.core.measure.criteria``), from the same runs, and keeps every run's outcome.
 
 Only the MPC reads the ``pelvis`` parameters (the reference angle and the pelvic MPC,
 ``controller/walker.py``), so the fixed pelvis runs once per value of the others: its row
@@ -20,12 +21,12 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from app.experiments.definitions import Sensitivity, Study
-from app.run_spec import Override, length
-from app.sim.metrics import KAPPA_SINGULAR
-from app.sweep.grid import Cell
-from app.sweep.measure import LimitSearch, LimitTask, criteria, outcome_of
 from controller.params import ControllerParams
 from controller.strategy import FIXED, MPC
+from pelvic_walk.core.grid import Cell
+from pelvic_walk.core.measure import LimitSearch, LimitTask, criteria, outcome_of
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
+from pelvic_walk.core.run_spec import Override, length
 
 MPC_ONLY_GROUPS = ("pelvis",)  # parameter groups only the MPC reads
 # what a row keeps of each run (besides its length and outcome)
@@ -127,7 +128,7 @@ class SensitivitySection:
     @property
     def clean_criteria(self) -> list[str]:
         """The clean criteria, by landing threshold, then by kappa(legs) bound."""
-        from app.sweep.measure import threshold_of
+        from pelvic_walk.core.measure import threshold_of
 
         names = [c for c in self.criteria if c != "walks"]
         return sorted(names, key=lambda c: (threshold_of(c)[1] != KAPPA_SINGULAR, threshold_of(c)))

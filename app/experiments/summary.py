@@ -21,10 +21,10 @@ from app.experiments.results import ClaimResult, StudyResults
 from app.experiments.robustness import PushCell, RobustnessSection, TradeRow, falls_p, stability
 from app.experiments.runs import case_key
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
-from app.run_spec import DISTURBANCE
-from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
 from controller import strategy
 from controller.strategy import FIXED, MPC, REDUNDANCY
+from pelvic_walk.core.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from pelvic_walk.core.run_spec import DISTURBANCE
 
 GAIN = paper.MAX_STEP[MPC] - paper.MAX_STEP[FIXED]  # [m] the paper's gain
 _CHEAP = paper.ENERGY_ROTATION_CHEAPER_UP_TO

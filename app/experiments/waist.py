@@ -41,9 +41,9 @@ import numpy as np
 
 from app.experiments.definitions import LATERAL, ROTATING, Study
 from app.experiments.runs import Results, StepExtract, array, case_key, step_of, summary_of
-from app.sweep.measure import walks
 from controller.params import CONTROL_DT, LATERAL_MODES, ControllerParams
 from controller.strategy import MPC
+from pelvic_walk.core.measure import walks
 
 DEG = 180.0 / math.pi
 # The onset is found on 200 Hz samples: one sample either side of the lift-off is noise.

@@ -27,9 +27,9 @@ from app.experiments.runs import (
     ZmpExtract,
     samples,
 )
-from app.run_spec import RunSpec
 from controller.kinematics import KAPPA_CAP
 from models.dyros_jet import FOOT_SIZE
+from pelvic_walk.core.run_spec import RunSpec
 
 STEP_COLUMNS = ("waist_angle_cmd", "waist_angle", "waist_rate", "theta_ref")
 WALK_COLUMNS = ("yaw_momentum", "h_low", "h_up")
@@ -75,7 +75,7 @@ def _planned_support(
 ) -> tuple[float, float | None]:
     """(share of samples whose (x, y) lies in the convex hull of the feet the plan has down,
     the farthest a sample lay outside it [mm] (None: none outside))."""
-    from app.sim.world import convex_hull, point_in_polygon, polygon_margin
+    from pelvic_walk.core.world import convex_hull, point_in_polygon, polygon_margin
 
     hx, hy = FOOT_SIZE[0] / 2, FOOT_SIZE[1] / 2
     corners = np.array([[hx, hy], [-hx, hy], [-hx, -hy], [hx, -hy]])
@@ -117,7 +117,7 @@ class EdgeCounter:
         if len(feet) != 1:
             self.counts["two feet"] += 1
             return
-        side = int(feet[0])  # 0 left, 1 right (app.sim.world's order)
+        side = int(feet[0])  # 0 left, 1 right (pelvic_walk.core.world's order)
         d, site = session.world.data, int(session.world.sole_site_ids[side])
         mat = d.site_xmat[site].reshape(3, 3)
         u, v = mat[:2, :2].T @ (m.contacts.cop - d.site_xpos[site, :2])  # sole frame
@@ -181,7 +181,7 @@ def _zmp_extract(
 
 def execute(spec: RunSpec, extracts: tuple[str, ...], mid_step: int) -> RunResult:
     """Run one spec headless; return its summary and the requested extracts (small)."""
-    from app.runs import run, summarize
+    from pelvic_walk.core.run import run, summarize
 
     start = time.perf_counter()
     params = spec.params()

@@ -3,15 +3,16 @@
 
 - ``intent``: what users ask for (:class:`Intent`), replaced atomically by callbacks;
 - ``loop``: :class:`LiveLoop` ticks the robots, paces them, publishes frames (no display code);
-- ``frames``: the immutable :class:`LiveFrame` / :class:`RobotFrame` the displays draw;
+- the immutable :class:`LiveFrame` / :class:`RobotFrame` the displays draw are the core's
+  (``pelvic_walk.core.frames``: plain data a headless run captures too);
 - ``history``: plot rows and kept frames, bounded (pause, scrub, record);
 - ``session``: :class:`LiveSim`, a session run by a thread, with the waits the API needs.
 """
 
-from app.live.frames import Horizon, LiveFrame, RobotFrame
 from app.live.intent import SPEED_MAX, SPEED_MIN, Intent, check_methods
 from app.live.loop import LIVE_STEPS, live_params
 from app.live.session import FALL_HOLD_S, LiveSim, Playback
+from pelvic_walk.core.frames import Horizon, LiveFrame, RobotFrame
 
 __all__ = [
     "FALL_HOLD_S",

@@ -17,21 +17,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from app.live.frames import LiveFrame
+from pelvic_walk.core.frames import HISTORY_DECIMATION, ROW_COLUMNS, LiveFrame
 
-HISTORY_DECIMATION = 4  # one plot row every 4 control ticks (50 Hz)
-ROW_COLUMNS = (
-    "clock",  # [s] session clock (simulated time since the session started)
-    "t",  # [s] the robot's own time (resets with it)
-    "waist_deg",  # measured waist yaw [deg]
-    "waist_rate_deg_s",  # commanded waist yaw rate [deg/s]
-    "yaw_momentum",  # whole-body yaw momentum about the CoM [kg m^2/s]
-    "kappa_legs",  # kappa of J_low's leg columns (eq. 45): it explodes as a knee straightens
-    "energy_two_step",  # energy of the last completed two-step window [J] (as Table 1)
-    "in_dsp",  # 1 in a double support, 0 in a single support, NaN standing
-    "step_index",
-    "fell",  # 1 while fallen
-)
+__all__ = ["HISTORY_DECIMATION", "ROW_COLUMNS", "FrameStore", "PlotHistory", "PlotWindow"]
+
 COL = {name: i for i, name in enumerate(ROW_COLUMNS)}
 
 

@@ -2,10 +2,10 @@
 
 Pattern (docs/ARCHITECTURE.md, "Principles"; as in mujoco_playground and pink's gizmo
 example): one owner of the simulation.
-:class:`LiveLoop` holds one :class:`~app.sim.session.Session` per selected method (same
+:class:`LiveLoop` holds one :class:`~pelvic_walk.core.session.Session` per selected method (same
 parameters, the method differs) and knows nothing of displays or the web: it reads the
 latest :class:`~app.live.intent.Intent` from a callable and hands each
-:class:`~app.live.frames.LiveFrame` to a callable. It runs in a thread of the web process
+:class:`~pelvic_walk.core.frames.LiveFrame` to a callable. It runs in a thread of the web process
 (:class:`app.live.session.LiveSim`) or in a worker process; either way one iteration is:
 
 1. apply new intent (rebuild the robots on a reset or a change of methods, hand new
@@ -58,14 +58,20 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.live.frames import LiveFrame, robot_frame
-from app.live.history import HISTORY_DECIMATION, ROW_COLUMNS
 from app.live.intent import Intent
-from app.sim.session import RunConfig, Session
-from app.sim.summary import unsuccessful
 from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
 from controller.strategy import StrategyError
+from pelvic_walk.core.frames import (
+    HISTORY_DECIMATION,
+    ROW_COLUMNS,
+    LiveFrame,
+    TwoStepEnergy,
+    plot_row,
+    robot_frame,
+)
+from pelvic_walk.core.session import RunConfig, Session
+from pelvic_walk.core.summary import unsuccessful
 
 log = logging.getLogger(__name__)
 
@@ -95,8 +101,7 @@ class _Robot:
     waiting_since: float | None = None  # session clock when it began standing by
     ref: tuple[FootstepPlan, float] | None = None  # the plan to keep in phase with, and the
     # session clock at which that plan's time was 0 (a robot built late)
-    _energy_key: int = -1
-    _energy: float = math.nan
+    two_step_energy: TwoStepEnergy = field(default_factory=TwoStepEnergy)
 
     @property
     def fell(self) -> bool:
@@ -113,15 +118,6 @@ class _Robot:
         return (
             self.fell_clock is not None or self.finished_clock is not None or self.error is not None
         )
-
-    def two_step_energy(self) -> float:
-        """The last completed two-step window's energy [J] (the quantity of Table 1)."""
-        key = len(self.session.energy_at_step_start)
-        if key != self._energy_key:
-            windows = self.session.energy_windows()
-            self._energy = float(windows[-1].sum()) if len(windows) else math.nan
-            self._energy_key = key
-        return self._energy
 
 
 @dataclass
@@ -461,25 +457,9 @@ class LiveLoop:
     # -- rows, frames, pacing -----------------------------------------------------------------
     def _record_rows(self) -> None:
         for method, robot in self.robots.items():
-            s, out, m = robot.session, robot.session.last, robot.session.measured
-            if out is None or m is None:  # not started yet (or standing by): a gap
-                continue
-            walking = 0 <= out.step_index < s.plan.n
-            row = np.array(
-                [
-                    self.clock,
-                    s.t,
-                    math.degrees(m.waist_angle),
-                    math.degrees(out.waist_rate),
-                    m.yaw_momentum,
-                    out.kappa_legs,
-                    robot.two_step_energy(),
-                    (0.0 if out.in_ssp else 1.0) if walking else math.nan,
-                    out.step_index,
-                    float(robot.fell),
-                ]
-            )
-            self._rows.setdefault(method, []).append(row)
+            row = plot_row(robot.session, self.clock, robot.two_step_energy(robot.session))
+            if row is not None:  # None: not started yet (or standing by), a gap
+                self._rows.setdefault(method, []).append(row)
 
     def _publish(self, intent: Intent) -> None:
         rtf, compute = self._rates.get()

@@ -30,12 +30,12 @@ from typing import cast
 
 import numpy as np
 
-from app.live.frames import LiveFrame
 from app.live.intent import Intent, check_methods
 from app.live.loop import PUBLISH_HZ
 from app.live.session import KEEP_S, SessionView
 from app.live.worker import FrameCodec, worker_main
 from controller import strategy
+from pelvic_walk.core.frames import LiveFrame
 
 ALIGN_S = 3.0  # [s] of each part's frames kept to show all robots at one instant
 

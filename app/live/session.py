@@ -30,7 +30,6 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from app.live.frames import LiveFrame
 from app.live.history import FrameStore, PlotHistory
 from app.live.intent import (
     DEFAULT_METHODS,
@@ -45,6 +44,7 @@ from app.live.intent import (
 )
 from app.live.loop import PUBLISH_HZ, LiveLoop, live_params
 from controller.params import ControllerParams
+from pelvic_walk.core.frames import LiveFrame
 
 log = logging.getLogger(__name__)
 KEEP_S = 40.0  # [s] of frames kept for scrubbing and recording (at least 30 s)

@@ -25,10 +25,10 @@ from typing import Any, cast
 
 import numpy as np
 
-from app.live.frames import LiveFrame
 from app.live.intent import Intent
 from app.live.loop import LiveLoop
 from controller import strategy
+from pelvic_walk.core.frames import LiveFrame
 
 log = logging.getLogger(__name__)
 

@@ -1,7 +1,7 @@
 """One address source for every seat: which client a request or a scene connection comes from.
 
 The per-address limits (private sessions, ``--sessions-per-address``; headless runs,
-:class:`app.web.api.runs.RunManager`) count clients by address. The page and the HTTP API
+:class:`app.web.api.headless.RunManager`) count clients by address. The page and the HTTP API
 (uvicorn's requests) and the 3-D scene (viser's websocket connections) all ask
 :meth:`ClientAddresses.resolve` with the connection's peer address and its headers, so one
 browser is one address everywhere.

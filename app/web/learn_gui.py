@@ -30,15 +30,15 @@ import numpy as np
 from app.live import LiveFrame, live_params
 from app.live.history import COL
 from app.live.pool import PoolFull
-from app.methods import METHOD_INFO
 from app.web.lessons import CLEAN_LIMIT_M, EXPLAIN, LESSONS, Lesson, analysis_html
 from controller.params import GROUPS
+from pelvic_walk.core.methods import METHOD_INFO
 
 if TYPE_CHECKING:
-    from app.live.frames import RobotFrame
     from app.live.intent import Intent
     from app.live.session import SessionView
     from app.web.host import PanelHost
+    from pelvic_walk.core.frames import RobotFrame
 
 NUMBERS_HZ = 2.0  # live-number refreshes per second while running
 STATUS_COLOURS = {

@@ -15,7 +15,7 @@ import json
 from functools import cache
 from typing import Any
 
-from app.report_dir import reference_report_dir
+from pelvic_walk.core.report_dir import reference_report_dir
 
 
 @cache

@@ -6,7 +6,8 @@ REFERENCE (what a layer is asked to follow: ZMP reference, theta_ref; drawn dash
 PREDICTED (what an MPC optimised or predicts over its horizon: CoM path, the MPC's theta, the
 predicted ZMP; solid), MEASURED (the simulated robot: centre of pressure, yaw momentum; black),
 PLAN (the footstep plan's geometry: footholds, support polygon, swing path; grey) and DANGER
-(a leg nearly straight, a fall; bright red). None of them is a method colour (app.methods)."""
+(a leg nearly straight, a fall; bright red). None of them is a method colour
+(pelvic_walk.core.methods)."""
 
 from __future__ import annotations
 
@@ -17,9 +18,9 @@ import numpy as np
 
 from app.live import RobotFrame
 from app.live.history import FrameStore
-from app.methods import METHOD_INFO
 from controller.footsteps import LEFT
 from controller.pelvis_reference import hip_points
+from pelvic_walk.core.methods import METHOD_INFO
 
 # One colour per meaning (module docstring).
 REFERENCE = (205, 30, 70)  # crimson

@@ -31,7 +31,6 @@ import viser
 
 from app.live import FALL_HOLD_S, SPEED_MAX, SPEED_MIN, LiveFrame, Playback, live_params
 from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX
-from app.methods import METHOD_INFO
 from app.web.camera import CAMERA_VIEWS
 from app.web.learn_gui import LearnTab
 from app.web.lessons import PRESETS, warnings_for
@@ -41,6 +40,7 @@ from app.web.record_gui import RecordFolder
 from app.web.scene import LAYERS, SLOW_STRATEGY_MS, fall_note
 from controller import strategy
 from controller.params import GROUP_TITLES, GROUPS, ControllerParams, spec
+from pelvic_walk.core.methods import METHOD_INFO
 
 if TYPE_CHECKING:
     from app.web.host import ViewHost

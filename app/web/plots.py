@@ -1,7 +1,7 @@
 """The GUI's plots: live metrics per method (Plots tab) and the horizon inspector (Inspect tab).
 
 Both draw published data only: the session's plot rows (:class:`~app.live.history.PlotHistory`)
-and the shown frame's :class:`~app.live.frames.Horizon`. They are updated at a few hertz (a
+and the shown frame's :class:`~pelvic_walk.core.frames.Horizon`. They are updated at a few hertz (a
 plot message carries its whole window, so updating at the display rate would dominate what
 a viewer is sent) and, while paused, whenever the shown instant changes.
 """
@@ -15,12 +15,12 @@ import numpy as np
 import viser
 import viser.uplot
 
-from app.live.frames import LiveFrame
 from app.live.session import SessionView
-from app.methods import METHOD_INFO
-from app.sim.metrics import KAPPA_SINGULAR
 from app.web.overlays import DANGER, MEASURED, PLAN, PREDICTED, REFERENCE
 from controller import strategy
+from pelvic_walk.core.frames import LiveFrame
+from pelvic_walk.core.methods import METHOD_INFO
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
 PLOT_HZ = 1.0  # live plot updates per second while running (each carries its whole window)
 INSPECTOR_HZ = 4.0  # horizon inspector updates per second while running

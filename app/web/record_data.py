@@ -10,10 +10,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.live.frames import LiveFrame
 from controller.params import ControllerParams
-
-RECORD_HZ = 20.0  # scene frames per second of simulated time (the display rate)
+from pelvic_walk.core.frames import LiveFrame
 
 
 @dataclass(frozen=True)

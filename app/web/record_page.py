@@ -8,8 +8,8 @@ import html
 import time
 from typing import TYPE_CHECKING
 
-from app.methods import METHOD_INFO
 from app.web.overlays import legend_html
+from pelvic_walk.core.methods import METHOD_INFO
 
 if TYPE_CHECKING:
     from app.web.record_data import Recording

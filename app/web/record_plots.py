@@ -12,10 +12,10 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from app.live.history import COL
-from app.methods import METHOD_INFO, method_hex
-from app.sim.metrics import KAPPA_SINGULAR
 from app.web.overlays import DANGER
 from app.web.plots import LOG_PLOTS, PLOTS
+from pelvic_walk.core.methods import METHOD_INFO, method_hex
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
 if TYPE_CHECKING:
     from app.web.record_data import Recording

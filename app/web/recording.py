@@ -4,7 +4,8 @@ A :class:`~app.web.record_data.Recording` is a list of published :class:`~app.li
 objects and the plot rows of the same window (``app.live.history.ROW_COLUMNS``). It is made
 from what a live session already keeps in the web process (:func:`from_session`: its
 FrameStore and plot history; the simulation is never paused or stepped for it) or captured
-during a headless run (:class:`HeadlessRecorder`, ``pelvic-walk simulate ... --record PATH``).
+during a headless run (:func:`of_capture`: the core's frame sink, ``pelvic-walk simulate ...
+--record PATH``).
 
 It is written as (:func:`package`):
 
@@ -35,13 +36,12 @@ import zipfile
 from collections.abc import Sequence
 from pathlib import Path
 
-import numpy as np
-
-from app.live.frames import LiveFrame, robot_frame
-from app.live.history import HISTORY_DECIMATION, ROW_COLUMNS
+from app.live.history import ROW_COLUMNS
 from app.live.session import KEEP_S, SessionView
-from app.web.record_data import RECORD_HZ, Recording
+from app.web.record_data import Recording
 from app.web.record_page import README, index_html, title
+from pelvic_walk.core.capture import RECORD_HZ, Capture
+from pelvic_walk.core.frames import LiveFrame
 
 FORMATS = ("zip", "html", "csv", "png")  # what GET /api/recording can return
 MEDIA_TYPES = {"zip": "application/zip", "html": "text/html", "csv": "text/csv", "png": "image/png"}
@@ -110,79 +110,11 @@ def from_session(session: SessionView, seconds: float) -> Recording:
     return Recording(decimate(frames), rows, "live session")
 
 
-class HeadlessRecorder:
-    """Captures a headless run for a recording: pass :meth:`capture` as ``run``'s
-    ``on_tick``. Frames at ``hz`` and plot rows at 50 Hz, as a live session keeps them."""
-
-    def __init__(self, method: str, hz: float = RECORD_HZ):
-        self.method = method
-        self.period = 1.0 / hz
-        self.frames: list[LiveFrame] = []
-        self.rows: list[np.ndarray] = []
-        self._ticks = 0
-        self._energy: tuple[int, float] = (-1, math.nan)
-
-    def capture(self, session) -> None:
-        """After every control tick of ``session`` (an ``app.sim.session.Session``)."""
-        self._ticks += 1
-        t = float(session.t)
-        if self._ticks % HISTORY_DECIMATION == 0:
-            self.rows.append(self._row(session, t))
-        if not self.frames or t - self.frames[-1].clock >= self.period - 1e-9:
-            robot = robot_frame(
-                session,
-                0,
-                t,
-                self.method,
-                int(session.fell),
-                0,
-                None,
-                False,
-                None,
-                fell_clock=session.fall_time,
-            )
-            self.frames.append(
-                LiveFrame(
-                    seq=len(self.frames),
-                    clock=t,
-                    paused=False,
-                    speed=1.0,
-                    realtime_factor=None,
-                    compute_realtime_factor=None,
-                    intent_version=0,
-                    steps_done=0,
-                    pushes_done=0,
-                    robots=(robot,),
-                )
-            )
-
-    def _row(self, session, t: float) -> np.ndarray:
-        out, m = session.last, session.measured
-        key = len(session.energy_at_step_start)
-        if key != self._energy[0]:
-            windows = session.energy_windows()
-            self._energy = (key, float(windows[-1].sum()) if len(windows) else math.nan)
-        walking = 0 <= out.step_index < session.plan.n
-        return np.array(
-            [
-                t,
-                t,
-                math.degrees(m.waist_angle),
-                math.degrees(out.waist_rate),
-                m.yaw_momentum,
-                out.kappa_legs,
-                self._energy[1],
-                (0.0 if out.in_ssp else 1.0) if walking else math.nan,
-                out.step_index,
-                float(session.fell),
-            ]
-        )
-
-    def recording(self, source: str) -> Recording:
-        if not self.frames:
-            raise ValueError("the run produced no frame")
-        rows = np.array(self.rows).reshape(-1, len(ROW_COLUMNS))
-        return Recording(tuple(self.frames), {self.method: rows}, source)
+def of_capture(capture: Capture, source: str) -> Recording:
+    """The recording of a headless run's :class:`~pelvic_walk.core.capture.Capture`."""
+    if not capture.frames:
+        raise ValueError("the run produced no frame")
+    return Recording(tuple(capture.frames), {capture.method: capture.rows}, source)
 
 
 # -- the scene ------------------------------------------------------------------------------

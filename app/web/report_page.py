@@ -67,7 +67,7 @@ def markdown_to_html(md: str) -> str:
 
 def render_report_page(report_dir: Path, about: str | None = None) -> str:
     """The report as HTML, or a page saying how to generate it; ``about`` (which run it is,
-    :func:`app.report_dir.choose_report`) heads the page."""
+    :func:`pelvic_walk.core.report_dir.choose_report`) heads the page."""
     md_path = report_dir / "report.md"
     nav = '<nav><a href="/">Live tool</a><a href="/docs">API docs</a></nav>'
     which = f'<p class="which"><b>Which report:</b> {markdown_inline(about)}</p>' if about else ""

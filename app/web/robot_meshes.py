@@ -10,7 +10,7 @@ import trimesh
 import viser.transforms as vtf
 
 from app.live import RobotFrame
-from app.methods import METHOD_INFO
+from pelvic_walk.core.methods import METHOD_INFO
 
 TINTED_GEOMS = ("torso", "head")  # drawn in the robot's method colour
 

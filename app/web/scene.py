@@ -11,7 +11,8 @@ and colours: a capsule is a cylinder and two spheres), so a frame moves them wit
 (a sphere needs no orientation); each overlay is one handle for all robots; world-fixed
 overlays sit under one frame that follows the robots, so they are re-sent only when they
 change; overlays are refreshed at ``OVERLAY_HZ`` and labels at ``LABEL_HZ``. Each robot wears
-its method's colour (``app.methods.METHOD_INFO``) on its torso and head; the overlays use one
+its method's colour (``pelvic_walk.core.methods.METHOD_INFO``) on its torso and head; the overlays
+use one
 colour per meaning (``app.web.overlays``), never a method colour.
 
 Layout: robot ``slot`` i of n walks at y = ((n - 1) / 2 - i) * ``ROBOT_SPACING`` (seen from
@@ -41,7 +42,6 @@ import viser
 
 from app.live import FALL_HOLD_S, LiveFrame, RobotFrame
 from app.live.history import FrameStore
-from app.methods import METHOD_INFO
 from app.web.camera import CAMERA_VIEWS, camera_pose, label_point, slot_offset
 from app.web.overlays import (
     DANGER,
@@ -70,6 +70,7 @@ from app.web.overlays import (
 )
 from app.web.robot_meshes import RobotMeshes
 from models.dyros_jet import FOOT_SIZE
+from pelvic_walk.core.methods import METHOD_INFO
 
 LAYERS: dict[str, tuple[str, bool]] = {  # key -> (GUI label, shown by default)
     "robots": ("Robots", True),

@@ -14,6 +14,6 @@ Modules: ``models`` (request and response models, generated from controller/para
 """
 
 from app.web.api.app import create_app
-from app.web.api.runs import RunManager
+from app.web.api.headless import RunManager
 
 __all__ = ["RunManager", "create_app"]

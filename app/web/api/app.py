@@ -11,17 +11,17 @@ from fastapi.exceptions import RequestValidationError
 
 from app.live.registry import SessionRegistry
 from app.live.session import SessionView
-from app.report_dir import ReportChoice, choose_report
 from app.web.addresses import ClientAddresses
 from app.web.api.edges import finite, router, validation_handler
+from app.web.api.headless import RunManager, run_client, runs_router
 from app.web.api.live import session_router
 from app.web.api.pages import mount_docs_assets, pages_router
 from app.web.api.recording import recording_router
-from app.web.api.runs import RunManager, run_client, runs_router
 from app.web.api.sessions import Caller, caller_of, resolvers, reveal_to, sessions_router
 from app.web.api.strategies import strategies_router
 from app.web.auth import Instructor
 from controller.params import GROUPS, ControllerParams, spec
+from pelvic_walk.core.report_dir import ReportChoice, choose_report
 
 
 def create_app(
@@ -42,7 +42,7 @@ def create_app(
         report_dir: what ``/report`` serves (``serve --report DIR``); None: the latest
             report this user's ``pelvic-walk experiments`` wrote outside temporary folders,
             looked up at each request, else the reference report
-            (:func:`app.report_dir.choose_report`).
+            (:func:`pelvic_walk.core.report_dir.choose_report`).
         health_extra: more fields for ``GET /api/health`` (e.g. the display's state).
         instructor: with a token, only its bearer changes the shared session.
         addresses: how a request's client address is read (behind a trusted proxy, its

@@ -21,7 +21,6 @@ from typing import Any
 from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.security import HTTPAuthorizationCredentials
 
-from app.live.frames import LiveFrame
 from app.live.registry import SHARED
 from app.live.session import SessionView
 from app.web.api.edges import conflict, finite, router, unprocessable
@@ -39,6 +38,7 @@ from app.web.api.models import (
 )
 from app.web.auth import BEARER, INSTRUCTOR_COOKIE, Instructor
 from controller import strategy
+from pelvic_walk.core.frames import LiveFrame
 
 # How long a handler waits for the loop to take its intent before answering anyway (a
 # playback answer then says "applied": false): well under the 5 s clients often default to

@@ -29,13 +29,13 @@ from fastapi.staticfiles import StaticFiles
 
 from app.live.registry import usable_credential
 from app.live.session import FALL_HOLD_S
-from app.methods import METHOD_INFO
-from app.report_dir import ReportChoice, package_dir
 from app.web.api.edges import file_under, router
 from app.web.auth import INSTRUCTOR_COOKIE, SEAT_COOKIE, TOKEN_PARAM, Instructor, new_credential
 from app.web.overlays import MEASURED, PREDICTED, REFERENCE
 from app.web.report_page import render_report_page
 from controller import strategy
+from pelvic_walk.core.methods import METHOD_INFO
+from pelvic_walk.core.report_dir import ReportChoice, package_dir
 
 DOCS_ASSETS = "/docs-assets"  # swagger-ui / redoc files of the fastapi-offline package
 WRONG_PARAM = "token_wrong"  # /?token_wrong=1: the page says the token given was wrong

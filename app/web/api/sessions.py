@@ -97,6 +97,23 @@ def no_own(registry: SessionRegistry) -> HTTPException:
     )
 
 
+def private_session(registry: SessionRegistry, sid: str, caller: Caller) -> tuple[str, SessionView]:
+    """The one access check of a private session: ``mine`` is the caller's own; any other id
+    answers only to its holder and the instructor (404 :func:`not_yours` otherwise, whether it
+    exists or not, and if it ended meanwhile)."""
+    if sid == MINE:
+        own = registry.owned(caller.credentials)
+        if own is None:
+            raise no_own(registry)
+        sid = own
+    elif not (caller.instructor or registry.may_use(sid, caller.credentials)):
+        raise not_yours(sid)
+    try:
+        return sid, registry.get(sid)
+    except NoSuchSession:
+        raise not_yours(sid) from None
+
+
 def resolvers(registry: SessionRegistry, caller_dep):
     """FastAPI dependencies: (by header or the shared session, by path); each returns (session
     id, session) once the caller may use it."""
@@ -109,17 +126,7 @@ def resolvers(registry: SessionRegistry, caller_dep):
                 return SHARED, registry.get(SHARED)
             except NoSuchSession:
                 raise HTTPException(404, detail=NO_SHARED) from None
-        if sid == MINE:
-            own = registry.owned(caller.credentials)
-            if own is None:
-                raise no_own(registry)
-            sid = own
-        elif not (caller.instructor or registry.may_use(sid, caller.credentials)):
-            raise not_yours(sid)
-        try:
-            return sid, registry.get(sid)
-        except NoSuchSession:  # ended meanwhile
-            raise not_yours(sid) from None
+        return private_session(registry, sid, caller)
 
     def by_header(
         x_pelvic_session: str | None = Header(
@@ -260,17 +267,7 @@ def sessions_router(
         """End a private session: your own, or (the instructor) any."""
         if sid == SHARED:
             raise conflict("the shared session runs as long as the server")
-        if sid == MINE:
-            own = registry.owned(caller.credentials)
-            if own is None:
-                raise no_own(registry)
-            sid = own
-        elif not (caller.instructor or registry.may_use(sid, caller.credentials)):
-            raise not_yours(sid)
-        try:
-            registry.get(sid)
-        except NoSuchSession:
-            raise not_yours(sid) from None
+        sid, _session = private_session(registry, sid, caller)
         registry.close(sid)
         return {"id": sid, "closed": True}
 

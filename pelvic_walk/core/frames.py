@@ -2,10 +2,11 @@
 
 A :class:`LiveFrame` is published by the loop after it ticks (at the display rate) or applies
 an intent. It holds one :class:`RobotFrame` per robot, built by :func:`robot_frame` from the
-robot's :class:`~app.sim.session.Session` (its world, its walker's last output and its last
+robot's :class:`~pelvic_walk.core.session.Session` (its world, its walker's last output and its last
 measurement): copies of plain arrays, no live object, so a frame can cross to another thread
 or process and be kept for scrubbing and recording. Metric rows for the plots
-(``app.live.history``) ride along with the frame that follows them.
+(:data:`ROW_COLUMNS`, one every :data:`HISTORY_DECIMATION` ticks, built by :func:`plot_row`)
+ride along with the frame that follows them.
 """
 
 from __future__ import annotations
@@ -15,12 +16,64 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.sim.metrics import KAPPA_SINGULAR
-from app.sim.session import Session
-from app.sim.summary import solver_failure_share, unsuccessful, unsuccessful_text
 from controller.footsteps import FootstepPlan
 from controller.params import ControllerParams
 from models.dyros_jet import ANKLE_BODIES, HIP_BODIES
+from pelvic_walk.core.metrics import KAPPA_SINGULAR
+from pelvic_walk.core.session import Session
+from pelvic_walk.core.summary import solver_failure_share, unsuccessful, unsuccessful_text
+
+HISTORY_DECIMATION = 4  # one plot row every 4 control ticks (50 Hz)
+ROW_COLUMNS = (
+    "clock",  # [s] session clock (simulated time since the session started)
+    "t",  # [s] the robot's own time (resets with it)
+    "waist_deg",  # measured waist yaw [deg]
+    "waist_rate_deg_s",  # commanded waist yaw rate [deg/s]
+    "yaw_momentum",  # whole-body yaw momentum about the CoM [kg m^2/s]
+    "kappa_legs",  # kappa of J_low's leg columns (eq. 45): it explodes as a knee straightens
+    "energy_two_step",  # energy of the last completed two-step window [J] (as Table 1)
+    "in_dsp",  # 1 in a double support, 0 in a single support, NaN standing
+    "step_index",
+    "fell",  # 1 while fallen
+)
+
+
+class TwoStepEnergy:
+    """The last completed two-step window's energy [J] (the quantity of Table 1) of one
+    session, recomputed only when a step has started since it was last read."""
+
+    def __init__(self) -> None:
+        self._key, self._value = -1, math.nan
+
+    def __call__(self, session: Session) -> float:
+        key = len(session.energy_at_step_start)
+        if key != self._key:
+            windows = session.energy_windows()
+            self._key, self._value = key, float(windows[-1].sum()) if len(windows) else math.nan
+        return self._value
+
+
+def plot_row(session: Session, clock: float, energy: float) -> np.ndarray | None:
+    """One plot row (:data:`ROW_COLUMNS`) of ``session`` after its last tick, at session
+    ``clock``; None before its first tick (a gap in the plots)."""
+    out, m = session.last, session.measured
+    if out is None or m is None:
+        return None
+    walking = 0 <= out.step_index < session.plan.n
+    return np.array(
+        [
+            clock,
+            session.t,
+            math.degrees(m.waist_angle),
+            math.degrees(out.waist_rate),
+            m.yaw_momentum,
+            out.kappa_legs,
+            energy,
+            (0.0 if out.in_ssp else 1.0) if walking else math.nan,
+            out.step_index,
+            float(session.fell),
+        ]
+    )
 
 
 @dataclass(frozen=True)
@@ -112,14 +165,15 @@ class RobotFrame:
     horizon: Horizon | None  # None before the first tick
     plan: FootstepPlan  # the footstep plan in force (immutable; replaced on replans)
     params: ControllerParams  # the parameters in force in this robot's walker
-    # why its finished plan is no success, in words ("" otherwise: app.sim.summary)
+    # why its finished plan is no success, in words ("" otherwise: pelvic_walk.core.summary)
     unsuccessful: str = ""
 
     @property
     def status(self) -> str:
         """One badge: stopped / fell / knee nearly straight / IK at the speed limit / clean.
 
-        The same test as the study's *clean* (``app/runs.py``): the knee is "nearly straight"
+        The same test as the study's *clean* (``pelvic_walk/core/run.py``): the knee is "nearly
+        straight"
         when kappa(J) of the leg columns reaches KAPPA_SINGULAR, so a robot the report calls
         clean never shows another badge live. The reach gauges show the leg's extension
         continuously (red near 1) for the eye."""

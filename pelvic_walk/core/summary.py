@@ -3,7 +3,7 @@ plus extras.
 
 Definitions (docs/DESIGN.md, "Metrics"):
 - peaks (waist angle and rate, yaw momentum, kappa) over the walking phase, up to a fall;
-- energy per two-step window (eq. 44): :meth:`app.sim.session.Session.energy_windows`, from
+- energy per two-step window (eq. 44): :meth:`pelvic_walk.core.session.Session.energy_windows`, from
   one sample of servo torque and joint speed per control period (200 Hz, as a robot logs
   them); the figure from every 1 ms substep, which also counts the servo chatter inside a
   period, is reported beside it (``*_substep``). Units: J per two-step window (the paper's
@@ -29,11 +29,11 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
 from controller.kinematics import KAPPA_CAP
+from pelvic_walk.core.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
 
 if TYPE_CHECKING:
-    from app.sim.session import Session
+    from pelvic_walk.core.session import Session
 
 # A success's share of ticks on which some QP failed (its layer fell back) at most: a failed
 # QP holds a layer's last command, so more than 2 ticks a second at 200 Hz is no walk of the
@@ -84,6 +84,24 @@ TIMING_KEYS = (
     "tick_ms_p99",
     "strategy_ms_median",
     "strategy_ms_max",
+)
+# the keys that compare walks (pelvic_walk.compare's columns, the live tables): what the
+# paper compares, then what says whether the walk was sound
+COMPARE_KEYS = (
+    "success",
+    "clean",
+    "fell",
+    "steps_completed",
+    "landing_error_max",
+    "waist_yaw_max_deg",
+    "waist_yaw_rate_max_deg_s",
+    "yaw_momentum_peak",
+    "energy_two_step_mean",
+    "energy_two_step_std",
+    "condition_number_legs_max",
+    "zmp_in_support_ratio",
+    "solver_failures",
+    "strategy_error",
 )
 DEG = 180.0 / np.pi
 

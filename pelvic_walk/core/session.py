@@ -3,7 +3,8 @@
 A :class:`Session` advances one control period per :meth:`Session.tick`: the controller ticks
 from the measured joint angles, the world holds the new servo targets for one period, and a
 :class:`Measurement` records what a robot's sensors and a force plate would report. The
-headless run (``app.runs.run``), the bench and the live tool all step the same ``Session``;
+headless run (``pelvic_walk.core.run.run``), the bench and the live tool all step the same
+``Session``;
 the live tool differs only in pacing and publishing frames.
 
 Every session owns its whole workspace (MuJoCo model and data, Pinocchio model and data, QP
@@ -19,8 +20,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from app.sim.metrics import COL, COLUMNS, Series, two_step_windows
-from app.sim.world import Contacts, World
 from controller.compiled import kernel
 from controller.footsteps import FootstepPlan
 from controller.kinematics import RobotKinematics
@@ -28,6 +27,8 @@ from controller.params import ControllerParams
 from controller.strategy import StrategyError
 from controller.walker import TickOutput, Walker
 from models.dyros_jet import ROBOT_XML
+from pelvic_walk.core.metrics import COL, COLUMNS, Series, two_step_windows
+from pelvic_walk.core.world import Contacts, World
 
 GRAVITY = 9.81  # [m/s^2]
 _sum = np.add.reduce  # ndarray.sum without its Python-level wrapper (the same reduction)
@@ -87,7 +88,8 @@ class Session:
     What is measured when (``record``):
 
     - every tick, always: the controller, the physics, the landing error half a DSP after
-      each touch-down (a success needs them: ``app.sim.summary``), the energy at each step's
+      each touch-down (a success needs them: ``pelvic_walk.core.summary``), the energy at each
+      step's
       start and the fall test (pelvis height, torso tilt, a body other than the feet on the
       floor);
     - ``record=True`` (headless runs: ``simulate``, the study, the bench): also every tick,
@@ -262,7 +264,7 @@ class Session:
         )
 
     def _record(self, out: TickOutput, m: Measurement, tick_ms: float) -> None:
-        """One row of the time series (app.sim.metrics.COLUMNS), written by column name.
+        """One row of the time series (pelvic_walk.core.metrics.COLUMNS), written by column name.
 
         The values go into a Python list first (a list item costs a fraction of a numpy
         element's assignment) and into the series' buffer in one assignment; arrays are read

@@ -1,8 +1,9 @@
-"""The one run function: a whole plan headless (``simulate``, ``POST /api/runs``, the study).
+"""The one run path: a whole plan headless, for every face.
 
-:class:`~app.sim.session.Session` steps one robot one control period at a time; :func:`run`
-loops it to the end of the plan (or shortly after a fall). The live tool paces the same
-``Session`` to real time and publishes frames instead.
+:class:`~pelvic_walk.core.session.Session` steps one robot one control period at a time;
+:func:`run` loops it to the end of the plan (or shortly after a fall), calling the faces'
+hooks; :func:`spec_of` names a run as the study's :class:`RunSpec`. The live tool paces the
+same ``Session`` to real time and publishes frames instead.
 """
 
 from __future__ import annotations
@@ -11,13 +12,13 @@ import dataclasses
 import time
 from collections.abc import Callable
 
-from app.run_spec import OWN_FIELDS, RunSpec
-from app.sim.session import RunConfig, Session
-from app.sim.summary import SUMMARY_KEYS, summarize
 from controller.params import GROUPS, ControllerParams
 from controller.strategy import StrategyError
+from pelvic_walk.core.run_spec import OWN_FIELDS, RunSpec
+from pelvic_walk.core.session import RunConfig, Session
+from pelvic_walk.core.summary import SUMMARY_KEYS, summarize
 
-__all__ = ["SUMMARY_KEYS", "RunConfig", "Session", "run", "spec_of", "summarize"]
+__all__ = ["SUMMARY_KEYS", "Hook", "RunConfig", "Session", "run", "spec_of", "summarize"]
 
 
 def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:
@@ -49,25 +50,42 @@ def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:
     return spec
 
 
+Hook = Callable[[Session], None]
+
+
 def run(
     cfg: RunConfig,
     max_wall_s: float | None = None,
-    on_tick: Callable[[Session], None] | None = None,
+    on_tick: Hook | None = None,
+    before_tick: Hook | None = None,
+    stop: Callable[[Session], bool] | None = None,
 ) -> Session:
-    """Run a whole plan headless (stops ``cfg.settle_time`` after a fall, at once when the
-    pelvis strategy fails (``session.error``), or at ``max_wall_s`` of wall time); returns the
-    session with its series and summary. ``on_tick`` (e.g. a recording's capture) is called
-    with the session after every control tick."""
+    """Run a whole plan headless: **the one run path** of every face (``simulate``,
+    ``pelvic_walk.simulate``, ``POST /api/runs``, a sweep, the push study, the study).
+
+    Stops at the end of the plan, ``cfg.settle_time`` after a fall, at once when the pelvis
+    strategy fails (its :class:`StrategyError` is kept in ``session.error``, never raised: a
+    student's fault stops this walk only), when ``stop(session)`` says so after a tick, or at
+    ``max_wall_s`` of wall time. Returns the session with its series and summary.
+
+    Hooks, called with the session: ``before_tick`` before every control tick (e.g. the push
+    study's shove at mid-step), ``on_tick`` after it (a frame sink such as
+    :class:`~pelvic_walk.core.capture.Capture`, a measurement).
+    """
     session = Session(cfg)
     start = time.perf_counter()
     settle_ticks = int(cfg.settle_time / cfg.params.control_dt)
     while not session.walker.finished:
+        if before_tick is not None:
+            before_tick(session)
         try:
             session.tick()
         except StrategyError:  # recorded in session.error; the summary says it
             break
         if on_tick is not None:
             on_tick(session)
+        if stop is not None and stop(session):
+            break
         if session.fell:
             settle_ticks -= 1
             if settle_ticks <= 0:

@@ -10,45 +10,11 @@ checked against the field's range when the parameters are built (ValueError, one
 from __future__ import annotations
 
 import argparse
-import math
 from collections.abc import Iterable
 from typing import Any
 
-from controller.params import GROUPS, ControllerParams, check_value, spec
-
-
-def fields() -> Iterable[tuple[str, str, dict[str, Any]]]:
-    """(group, name, metadata) of every parameter, in declaration order."""
-    defaults = ControllerParams()
-    for group in GROUPS:
-        for name, meta in spec(getattr(defaults, group)).items():
-            yield group, name, meta
-
-
-def option_name(group: str, name: str, meta: dict[str, Any]) -> str:
-    return meta.get("cli") or f"{group}-{name}".replace("_", "-")
-
-
-def convert(group: str, name: str, text: str, meta: dict[str, Any]) -> Any:
-    """A field's value from text (ValueError with a one-line message)."""
-    where = f"{group}.{name}"
-    kind = meta["type"]
-    if kind == "bool":
-        low = text.strip().lower()
-        if low in ("1", "true", "yes", "on"):
-            return True
-        if low in ("0", "false", "no", "off"):
-            return False
-        raise ValueError(f"{where} must be true or false, got {text!r}")
-    if kind == "str":
-        return text.strip()
-    try:
-        value: Any = int(text) if kind == "int" else float(text)
-    except ValueError:
-        raise ValueError(f"{where} must be a number, got {text!r}") from None
-    if isinstance(value, float) and not math.isfinite(value):
-        raise ValueError(f"{where} must be finite, got {text!r}")
-    return value
+from controller.params import ControllerParams, check_value
+from pelvic_walk.core.params import convert, fields, option_name, parse_assignment, split_list
 
 
 def positive_int(text: str) -> int:
@@ -62,10 +28,56 @@ def positive_int(text: str) -> int:
     return value
 
 
-def split_list(items: Iterable[str]) -> list[str]:
-    """A list option's items, given with commas or spaces alike: ``--methods fixed mpc``,
-    ``--methods fixed,mpc`` and ``--methods fixed, mpc`` all give ``["fixed", "mpc"]``."""
-    return [part.strip() for item in items for part in item.split(",") if part.strip()]
+JOBS_HELP = (
+    "worker processes (default: the CPU count); with --ray and no address, the local Ray "
+    "instance's CPUs"
+)
+
+
+def add_jobs_argument(
+    parser: argparse.ArgumentParser, default: int | None = None, help: str = JOBS_HELP
+) -> None:
+    """``--jobs J``: how many runs at once on the run engine (``pelvic_walk.core.engine``)."""
+    parser.add_argument("--jobs", type=positive_int, default=default, metavar="J", help=help)
+
+
+def add_ray_argument(parser: argparse.ArgumentParser) -> None:
+    """``--ray [ADDRESS]``: the runs on a Ray cluster, or on a local Ray instance without one
+    (``args.ray``: None without the option, "" for a local instance)."""
+    parser.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="run on Ray: a cluster at ADDRESS, or without one a local Ray instance "
+        "(pip install 'pelvic-walk[cluster]')",
+    )
+
+
+def add_set_argument(parser: argparse.ArgumentParser, grid: bool = False) -> None:
+    """``--set GROUP.NAME=VALUE`` (repeatable): any parameter by its dotted name; with
+    ``grid`` a sweep's axis, ``GROUP.NAME=V1,V2,...`` (``args.grid_set``)."""
+    if grid:
+        parser.add_argument(
+            "--set",
+            dest="grid_set",
+            action="extend",
+            nargs="+",
+            default=[],
+            metavar="GROUP.NAME=V1,V2,...",
+            help="an axis of the grid: any parameter of controller/params.py and its values, "
+            "separated by commas or spaces (repeatable; one value = fixed)",
+        )
+        return
+    parser.add_argument(
+        "--set",
+        dest="param_set",
+        action="append",
+        default=[],
+        metavar="GROUP.NAME=VALUE",
+        help="any parameter of controller/params.py by its dotted name",
+    )
 
 
 STRATEGY_HELP = (
@@ -144,34 +156,6 @@ class MethodList(argparse.Action):
         setattr(namespace, self.dest, methods)
 
 
-def _meta_of(dotted: str) -> tuple[str, str, dict[str, Any]]:
-    group, _, name = dotted.partition(".")
-    for g, n, meta in fields():
-        if g == group and n == name:
-            return g, n, meta
-    known = ", ".join(f"{g}.{n}" for g, n, _ in fields())
-    raise ValueError(f"unknown parameter {dotted!r} (one of: {known})")
-
-
-def parse_assignment(text: str, many: bool = False) -> tuple[str, str, Any]:
-    """``GROUP.NAME=VALUE`` (or ``=V1,V2,...`` with ``many``) -> (group, name, value(s)).
-
-    Every value is converted and range-checked; ValueError with one line otherwise.
-    """
-    dotted, sep, rhs = text.partition("=")
-    if not sep or not rhs.strip():
-        raise ValueError(f"expected GROUP.NAME=VALUE, got {text!r}")
-    group, name, meta = _meta_of(dotted.strip())
-    values = (
-        [convert(group, name, part, meta) for part in rhs.split(",")]
-        if many
-        else [convert(group, name, rhs, meta)]
-    )
-    for v in values:
-        check_value(group, name, v, meta)
-    return group, name, (values if many else values[0])
-
-
 def _number(group: str, name: str, meta: dict[str, Any]):
     def parse(text: str) -> Any:
         try:
@@ -212,14 +196,7 @@ def add_param_options(parser: argparse.ArgumentParser, required: Iterable[str] =
             metavar="VALUE" if not choices else "MODE",
             help=f"{meta['label']}{unit} (default {meta['default']}{rng}{choices})",
         )
-    parser.add_argument(
-        "--set",
-        dest="param_set",
-        action="append",
-        default=[],
-        metavar="GROUP.NAME=VALUE",
-        help="any parameter of controller/params.py by its dotted name",
-    )
+    add_set_argument(parser)
 
 
 def params_from_args(

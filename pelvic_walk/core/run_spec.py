@@ -9,7 +9,7 @@ that does not know the name yet loads.
 
 A *seeded* spec is one of the study's repeats: a 0.01 rad perturbation of the initial state and
 a horizontal force on the torso through the whole run, each axis N(0, :data:`DISTURBANCE`)
-renewed every :data:`DISTURBANCE_PERIOD` (``app.sim.session.RunConfig``). 5 N is 1 % of the
+renewed every :data:`DISTURBANCE_PERIOD` (``pelvic_walk.core.session.RunConfig``). 5 N is 1 % of the
 robot's weight (~0.1 m/s^2 on the CoM): unmodelled pulls such as a tether or a hand on a safety
 rope. Repeats then differ for the whole run, not only by a start-up transient that dies out.
 A spec may ask for pushes of another size (``push_std``, e.g. the robustness section's 15 N).
@@ -26,7 +26,7 @@ from controller import strategy
 from controller.params import GROUPS, ControllerParams
 
 if TYPE_CHECKING:
-    from app.sim.session import RunConfig
+    from pelvic_walk.core.session import RunConfig
 
 SEED_PERTURBATION = 0.01  # [rad] std of the seeded initial perturbation of a repeat
 DISTURBANCE = 5.0  # [N] std of each axis of the seeded pushes
@@ -145,8 +145,8 @@ class RunSpec:
             strategy.load_file(self.strategy_file)
 
     def config(self) -> RunConfig:
-        """The headless run of this spec (``app.runs.run`` takes it)."""
-        from app.sim.session import RunConfig
+        """The headless run of this spec (``pelvic_walk.core.run.run`` takes it)."""
+        from pelvic_walk.core.session import RunConfig
 
         return RunConfig(
             params=self.params(),

@@ -45,7 +45,7 @@ def busy_line(held: int, limit: int, whose: str) -> str:
 
 
 class RunManager:
-    """Headless runs (``app.runs.run``) in one background worker thread.
+    """Headless runs (``pelvic_walk.core.run.run``) in one background worker thread.
 
     Bounded: at most ``per_client`` runs queued or running for one client and ``max_pending``
     for all (they share the CPU with the live tool); a client ``None`` (the instructor) is
@@ -95,7 +95,7 @@ class RunManager:
         return run_id
 
     def _work(self, run_id: str, params: ControllerParams, seed: int | None) -> None:
-        from app.runs import run, spec_of, summarize
+        from pelvic_walk.core.run import run, spec_of, summarize
 
         self._set(run_id, status="running")
         try:

@@ -28,10 +28,8 @@ from datetime import datetime
 from pathlib import Path
 from typing import Any
 
-from app.methods import METHOD_INFO
-from app.sim.summary import TIMING_KEYS
-from app.sweep.grid import Grid
-from app.sweep.measure import (
+from pelvic_walk.core.grid import Grid
+from pelvic_walk.core.measure import (
     LIMIT_COLUMNS,
     RESOLUTION,
     SEARCH_MAX,
@@ -39,6 +37,8 @@ from app.sweep.measure import (
     TASK_COLUMNS,
     Task,
 )
+from pelvic_walk.core.methods import METHOD_INFO
+from pelvic_walk.core.summary import TIMING_KEYS
 
 TABLE_CSV = "sweep.csv"
 TABLE_JSONL = "sweep.jsonl"
@@ -136,7 +136,7 @@ def _number(value: Any) -> float:
 
 
 def _param_label(name: str) -> str:
-    from app.params_cli import fields
+    from pelvic_walk.core.params import fields
 
     for group, field_name, meta in fields():
         if f"{group}.{field_name}" == name:
@@ -274,7 +274,7 @@ def _lines(
     log: bool,
     folder: Path,
 ) -> Path:
-    from app.methods import method_hex
+    from pelvic_walk.core.methods import method_hex
 
     (axis,) = grid.axes
     numeric = all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in axis.values)
@@ -355,7 +355,7 @@ def write_readme(
             "A limit is the longest length below the shortest failed one found; `*_first_fail` "
             "is that failure (empty: nothing failed up to the range's top); `*_above` lists "
             "lengths that passed above it (failures not monotonic in length); `trace` lists "
-            "every run in order (see `app/sweep/measure.py`).",
+            "every run in order (see `pelvic_walk/core/measure.py`).",
             "",
         ]
     else:
@@ -385,3 +385,16 @@ def write_grid(out: Path, grid: Grid) -> Path:
     path = out / GRID_JSON
     path.write_text(json.dumps(grid.as_dict(), indent=2) + "\n")
     return path
+
+
+def check_out(out: Path) -> str | None:
+    """A one-line complaint if ``out`` cannot be a writable folder (creates it otherwise)."""
+    if out.exists() and not out.is_dir():
+        return f"--out {out}: is a file, not a folder"
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        return f"--out {out}: cannot create it ({exc.strerror or exc})"
+    if not os.access(out, os.W_OK | os.X_OK):
+        return f"--out {out}: not writable"
+    return None

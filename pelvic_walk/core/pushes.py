@@ -1,6 +1,6 @@
 """The push study: how hard a sideways shove each method survives (``pelvic-walk push-study``).
 
-One run walks a short plan headless (the same :class:`~app.sim.session.Session` as
+One run walks a short plan headless (the same :class:`~pelvic_walk.core.session.Session` as
 ``simulate`` and the live tool) and applies a horizontal force to the torso for a short time
 at the middle of one step's single support, through the world's push (MuJoCo
 ``xfrc_applied``). The run *recovers* when the robot has not fallen by the end of the plan.
@@ -17,16 +17,16 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 
 import mujoco
 import numpy as np
 
-from app.sim.session import RunConfig, Session
 from controller import strategy
 from controller.footsteps import LEFT
 from controller.params import ControllerParams
+from pelvic_walk.core.run import run
+from pelvic_walk.core.session import RunConfig, Session
 
 DIRECTIONS = {"left": (0.0, 1.0), "right": (0.0, -1.0), "forward": (1.0, 0.0), "back": (-1.0, 0.0)}
 PUSH_STEP = 2  # the pushed step: the third, past the start-up step, in steady walking
@@ -51,6 +51,7 @@ class PushOutcome:
     fall_time: float | None  # [s]
     fall_reason: str | None
     steps_completed: int
+    error: str | None = None  # the pelvis strategy stopped the walk (its file and line)
 
 
 def run_push(
@@ -76,30 +77,39 @@ def run_push(
         raise ValueError(f"the pushed step must be in 0..{n_steps - 1}, got {step}")
     base = params or ControllerParams()
     p = base.replace(method=method, walk={"step_length": step_length, "n_steps": n_steps})
-    session = Session(RunConfig(params=p))
-    plan = session.plan
-    t_push = 0.5 * (float(plan.liftoff_times()[step]) + float(plan.landing_times()[step]))
-    support = "right" if int(plan.swing_side[step]) == LEFT else "left"
-    dx, dy = DIRECTIONS[direction]
-    world = session.world
-    along = np.array([dx, dy])
+    along = np.array(DIRECTIONS[direction])
+    dt = p.control_dt
+    speeds: dict[str, float] = {}
+    when: dict[str, float] = {}  # the push's time, from the run's own plan
 
-    def com_speed() -> float:  # the whole body's CoM velocity along the push [m/s]
+    def push_time(session: Session) -> float:
+        if not when:
+            plan = session.plan
+            when["t"] = 0.5 * (
+                float(plan.liftoff_times()[step]) + float(plan.landing_times()[step])
+            )
+        return when["t"]
+
+    def com_speed(session: Session) -> float:  # the whole body's CoM velocity along the push
+        world = session.world
         mujoco.mj_subtreeVel(world.model, world.data)  # MuJoCo's step leaves it stale
         return float(world.data.subtree_linvel[world.root_id][:2] @ along)
 
-    pushed, v_before, v_after = False, 0.0, None
-    dt = session.params.control_dt
-    while not session.walker.finished and not session.fell:
+    def shove(session: Session) -> None:
         # The push acts from the next control period on: start it on the tick that ends
         # closest to mid-SSP.
-        if not pushed and session.t + 0.5 * dt >= t_push:
-            v_before = com_speed()
+        if "before" not in speeds and session.t + 0.5 * dt >= push_time(session):
+            speeds["before"] = com_speed(session)
             session.push(force * along, duration)
-            pushed = True
-        session.tick()
-        if pushed and v_after is None and not world.pushing:
-            v_after = com_speed()
+
+    def after(session: Session) -> None:
+        if "before" in speeds and "after" not in speeds and not session.world.pushing:
+            speeds["after"] = com_speed(session)
+
+    # a fall ends the trial at once (the outcome is the fall)
+    session = run(RunConfig(params=p), before_tick=shove, on_tick=after, stop=lambda s: s.fell)
+    plan = session.plan
+    support = "right" if int(plan.swing_side[step]) == LEFT else "left"
     summary_steps = int(sum(1 for k in session.landings if k < plan.n_walking_steps))
     return PushOutcome(
         method=method,
@@ -107,13 +117,14 @@ def run_push(
         force=force,
         direction=direction,
         duration=duration,
-        push_time=t_push,
+        push_time=push_time(session),
         support=support,
-        com_speed_change=(v_after if v_after is not None else math.nan) - v_before,
-        recovered=not session.fell,
+        com_speed_change=speeds.get("after", math.nan) - speeds.get("before", 0.0),
+        recovered=not session.fell and session.error is None,
         fall_time=session.fall_time,
         fall_reason=session.fall_reason,
         steps_completed=summary_steps,
+        error=session.error,
     )
 
 
@@ -130,8 +141,11 @@ class Survival:
     fall_reason: str | None  # why it fell at ``failed``
     runs: int
     support: str | None = None  # the foot the robot stood on when pushed
+    error: str | None = None  # the pelvis strategy stopped a trial (its file and line): no figure
 
     def describe(self) -> str:
+        if self.error is not None:
+            return f"{self.method}: stopped by its strategy: {self.error}"
         if self.survived is None:
             return f"{self.method}: falls without a push at {self.step_length:.2f} m"
         if self.failed is None:
@@ -173,6 +187,10 @@ def largest_survived(
         mid = 0.5 * (lo + hi)
         out = trial(mid)
         runs, support = runs + 1, out.support
+        if out.error is not None:  # a student's fault, not a fall: no bracket to report
+            return Survival(
+                method, step_length, direction, duration, None, None, None, runs, support, out.error
+            )
         if out.recovered:
             lo, survived_seen = mid, True
         else:
@@ -195,10 +213,6 @@ def largest_survived(
     return Survival(method, step_length, direction, duration, lo, hi, why, runs, support)
 
 
-def _survival_job(args: tuple) -> Survival:
-    return largest_survived(*args)
-
-
 def study(
     methods: Sequence[str],
     step_length: float,
@@ -207,13 +221,23 @@ def study(
     f_high: float = F_HIGH,
     resolution: float = F_RESOLUTION,
     jobs: int = 1,
+    ray: str | None = None,
 ) -> list[Survival]:
-    """:func:`largest_survived` for each method (one process per method with ``jobs`` > 1)."""
-    args = [(m, step_length, direction, duration, f_high, resolution) for m in methods]
-    if jobs <= 1 or len(args) == 1:
-        return [_survival_job(a) for a in args]
-    with ProcessPoolExecutor(max_workers=min(jobs, len(args))) as pool:
-        return list(pool.map(_survival_job, args))
+    """:func:`largest_survived` for each method, a job each on the run engine
+    (:mod:`pelvic_walk.core.engine`: in this process, a ``spawn`` process pool of ``jobs``, or
+    Ray with ``ray`` not None). ImportError / ConnectionError (one line) when Ray cannot run."""
+    from pelvic_walk.core.engine import OneJob, make_backend, run_tasks
+
+    tasks = [
+        OneJob(largest_survived, m, step_length, direction, duration, f_high, resolution, label=m)
+        for m in methods
+    ]
+    backend = make_backend(ray, jobs, len(tasks))
+    try:
+        run_tasks(tasks, backend, desc=f"push study ({backend.name})")
+    finally:
+        backend.close()
+    return [t.result for t in tasks]
 
 
 def table(rows: Sequence[Survival], force: float | None = None) -> str:
@@ -223,6 +247,12 @@ def table(rows: Sequence[Survival], force: float | None = None) -> str:
         "|---|---|---|---|---|---|",
     ]
     for s in rows:
+        if s.error is not None:
+            lines.append(
+                f"| {s.method} | {s.step_length:.2f} | {s.direction}, {s.duration:.2f} s "
+                "| - | - | stopped by its strategy |"
+            )
+            continue
         survived = "falls unpushed" if s.survived is None else f"{s.survived:.0f}"
         if s.failed is None:
             survived = f">= {s.survived:.0f}"
@@ -236,46 +266,3 @@ def table(rows: Sequence[Survival], force: float | None = None) -> str:
 
 def as_json(rows: Sequence[Survival], singles: Sequence[PushOutcome] = ()) -> dict:
     return {"survival": [asdict(s) for s in rows], "pushes": [asdict(o) for o in singles]}
-
-
-def main(args) -> int:
-    """``pelvic-walk push-study``: one push per method (``--force``) or the bisection."""
-    import json
-    import sys
-    import time
-
-    from controller.params import spec
-
-    meta = spec(ControllerParams().walk)["step_length"]
-    problems = []
-    if not meta["min"] <= args.step_length <= meta["max"]:
-        problems.append(f"--step-length must be in {meta['min']}..{meta['max']} m")
-    if not 0.0 < args.duration <= 1.0:
-        problems.append("--duration must be in (0, 1] s")
-    if args.force is not None and args.force < 0.0:
-        problems.append("--force must be >= 0 N")
-    if problems:
-        print(f"pelvic-walk push-study: error: {problems[0]}", file=sys.stderr)
-        return 2
-    start = time.perf_counter()
-    singles: list[PushOutcome] = []
-    rows: list[Survival] = []
-    if args.force is not None:
-        for m in args.methods:
-            o = run_push(m, args.step_length, args.force, args.direction, args.duration)
-            singles.append(o)
-            result = (
-                "recovered" if o.recovered else f"FELL at {o.fall_time:.2f} s ({o.fall_reason})"
-            )
-            print(
-                f"{m}: {o.force:.0f} N {o.direction} for {o.duration:.2f} s at t = "
-                f"{o.push_time:.2f} s (mid-SSP, on the {o.support} foot), step "
-                f"{o.step_length:.2f} m: {result}"
-            )
-    else:
-        rows = study(args.methods, args.step_length, args.direction, args.duration, jobs=args.jobs)
-        print(table(rows))
-    print(f"({time.perf_counter() - start:.0f} s)")
-    if args.json:
-        args.json.write_text(json.dumps(as_json(rows, singles), indent=2))
-    return 0

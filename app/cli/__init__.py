@@ -14,21 +14,23 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, NoReturn
 
-from app.params_cli import (
+from app.cli.options import (
     MethodList,
+    add_jobs_argument,
     add_param_options,
+    add_ray_argument,
     add_strategy_argument,
     load_strategy_options,
     method_name,
     params_from_args,
     positive_int,
 )
-from app.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
-from app.sweep.cli import add_sweep_arguments
+from app.cli.sweep import add_sweep_arguments
 from controller import strategy
+from pelvic_walk.core.run_spec import DISTURBANCE, DISTURBANCE_PERIOD, SEED_PERTURBATION
 
 if TYPE_CHECKING:
-    from app.sim.session import RunConfig
+    from pelvic_walk.core.session import RunConfig
 
 
 class _Parser(argparse.ArgumentParser):
@@ -248,23 +250,8 @@ def build_parser() -> argparse.ArgumentParser:
         "FILE.py[:Class]: your own pelvis strategy, studied beside the MPC in section 10 "
         "(its own row: longest step, waist, energy, kappa, push survival; repeatable)",
     )
-    p.add_argument(
-        "--jobs",
-        type=positive_int,
-        default=None,
-        metavar="J",
-        help="worker processes (default: the CPU count); with --ray and no address, the "
-        "local Ray instance's CPUs",
-    )
-    p.add_argument(
-        "--ray",
-        nargs="?",
-        const="",
-        default=None,
-        metavar="ADDRESS",
-        help="run on Ray: a cluster at ADDRESS, or without one a local Ray instance "
-        "(pip install 'pelvic-walk[cluster]')",
-    )
+    add_jobs_argument(p)
+    add_ray_argument(p)
 
     p = sub.add_parser("sweep", help="a parameter grid over methods (process pool or Ray)")
     add_sweep_arguments(p)
@@ -313,16 +300,18 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--direction", choices=("left", "right", "forward", "back"), default="left")
     p.add_argument("--duration", type=_finite, default=0.1, help="[s] (default 0.1)")
     p.add_argument("--force", type=_finite, default=None, help="[N] one push, no bisection")
-    p.add_argument("--jobs", type=positive_int, default=1)
+    add_jobs_argument(p, 1, "processes: one method's bisection each (default 1: in this process)")
+    add_ray_argument(p)
     p.add_argument("--json", type=Path, default=None)
     return parser
 
 
 def simulate_config(args: argparse.Namespace) -> RunConfig:
     """The run ``simulate`` makes: the study's run of the same cell and seed
-    (``app.runs.spec_of``), with the pushes' size and the QP back-end the options ask for.
+    (``pelvic_walk.core.run.spec_of``), with the pushes' size and the QP back-end the options ask
+    for.
     ValueError on a bad value."""
-    from app.runs import spec_of
+    from pelvic_walk.core.run import spec_of
 
     if args.disturbance is not None and args.seed is None:
         raise ValueError("--disturbance needs --seed (the pushes are drawn from the seed)")
@@ -349,8 +338,8 @@ def simulate_method(args: argparse.Namespace) -> str:
 
 
 def _simulate(args: argparse.Namespace) -> int:
-    from app.runs import run, summarize
-    from app.sim.summary import unsuccessful_text
+    from pelvic_walk.core.run import run, summarize
+    from pelvic_walk.core.summary import unsuccessful_text
 
     try:
         cfg = simulate_config(args)
@@ -360,9 +349,9 @@ def _simulate(args: argparse.Namespace) -> int:
     params = cfg.params
     recorder = None
     if args.record:
-        from app.web.recording import HeadlessRecorder
+        from pelvic_walk.core.capture import Capture
 
-        recorder = HeadlessRecorder(params.method)
+        recorder = Capture(params.method)
     session = run(cfg, on_tick=recorder.capture if recorder else None)
     summary = summarize(session)
     ok = (
@@ -427,7 +416,7 @@ def _write_recording(recorder, args: argparse.Namespace) -> None:
     how = f"--strategy {args.strategy_file}" if args.strategy_file else f"--method {args.method}"
     source = f"headless run (pelvic-walk simulate {how})"
     try:
-        path = recording.write(recorder.recording(source), args.record)
+        path = recording.write(recording.of_capture(recorder, source), args.record)
     finally:
         recording.shutdown()
     size = sum(f.stat().st_size for f in [path, *path.rglob("*")] if f.is_file())
@@ -516,23 +505,23 @@ def main(argv: list[str] | None = None) -> int:
                 strategies=tuple(args.strategies),
             )
         if args.command == "sweep":
-            from app.sweep import sweep_main
+            from app.cli.sweep import sweep_main
 
             return sweep_main(args)
         if args.command == "loadtest":
-            from app.loadtest import main as loadtest_main
+            from app.bench.loadtest import main as loadtest_main
 
             return loadtest_main(
                 args.viewers, args.robots, args.seconds, args.port, args.viser_port, args.json
             )
         if args.command == "bench":
-            from app.bench import main as bench_main
+            from app.bench.timings import main as bench_main
 
             return bench_main(args.json, ticks=args.ticks, peer_python_path=args.peer_python)
         if args.command == "push-study":
-            from app.pushes import main as push_main
+            from app.cli.push_study import push_study_main
 
-            return push_main(args)
+            return push_study_main(args)
     except KeyboardInterrupt:
         return 130
     return 2

@@ -1,15 +1,16 @@
 """What one cell of a sweep measures, for one method: a *task* that asks for runs one by one.
 
-A run is :func:`run_one` (a :class:`~app.run_spec.RunSpec` in, a flat dict of plain values
+A run is :func:`run_one` (a :class:`~pelvic_walk.core.run_spec.RunSpec` in, a flat dict of plain
+values
 out, so it crosses process and Ray boundaries cheaply). A task gives its next job with
-:meth:`next_job` (``(run, (spec,))`` for :func:`app.sweep.engine.run_tasks`), is told each
+:meth:`next_job` (``(run, (spec,))`` for :func:`pelvic_walk.core.engine.run_tasks`), is told each
 outcome with :meth:`record`, and gives its table row with :meth:`row`. Runs are deterministic
 given their parameters, so a task's row does not depend on which backend ran it or in which
 order the cells finished.
 
 ``summary`` (:class:`SummaryTask`): one walk of ``walk.n_steps`` steps at the cell's
 parameters (step length from the grid, else the default); the row has the keys of
-``simulate --json`` (``app.sim.summary.SUMMARY_KEYS``), ``clean``, the derived ``walks``
+``simulate --json`` (``pelvic_walk.core.summary.SUMMARY_KEYS``), ``clean``, the derived ``walks``
 and the summary's other scalar extras.
 
 ``limit`` (:class:`LimitTask`, logic in :class:`LimitSearch`): the longest step length that
@@ -45,10 +46,10 @@ from collections.abc import Callable, Mapping, Sequence
 from functools import partial
 from typing import Any
 
-from app.run_spec import RunSpec, length
-from app.sim.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
-from app.sim.summary import MISSED_FOOTHOLDS, SUMMARY_KEYS
-from app.sweep.grid import Cell
+from pelvic_walk.core.grid import Cell, Grid, GridError
+from pelvic_walk.core.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
+from pelvic_walk.core.run_spec import RunSpec, length
+from pelvic_walk.core.summary import MISSED_FOOTHOLDS, SUMMARY_KEYS
 
 SEARCH_MIN = 0.10  # [m] shortest step length the limit search tries
 SEARCH_MAX = 0.60  # [m] longest (the step_length parameter's maximum)
@@ -76,7 +77,7 @@ LIMIT_COLUMNS = limit_columns()
 
 def walks(summary: Mapping[str, Any], landing: float = LANDING_ERROR_CLEAN) -> bool:
     """A success but for the landings (no fall, the plan completed, QPs within their share of
-    ticks: ``app.sim.summary``), every landing within ``landing`` [m]; at the default, the
+    ticks: ``pelvic_walk.core.summary``), every landing within ``landing`` [m]; at the default, the
     summary's own success."""
     le = summary.get("landing_error_max")
     reasons = summary.get("unsuccessful")
@@ -95,7 +96,7 @@ def clean(
     """The clean criterion of a run's summary at other thresholds: walks (landings within
     ``landing``), no QP failure, no servo saturation, no IK tick at the joint-speed limit,
     kappa(legs) below ``kappa``. At the defaults it is the summary's own ``clean``
-    (``app.sim.summary``; a test checks that they agree)."""
+    (``pelvic_walk.core.summary``; a test checks that they agree)."""
     legs = summary.get("condition_number_legs_max")
     return (
         walks(summary, landing)
@@ -152,13 +153,13 @@ def _plain(value: Any) -> Any:
 
 
 def run_one(spec: RunSpec) -> Outcome:
-    """One closed-loop headless run (``app.runs.run``) -> its summary as plain values.
+    """One closed-loop headless run (``pelvic_walk.core.run.run``) -> its summary as plain values.
 
     The keys of ``simulate --json``, then ``clean``, ``walks``, the summary's other scalar
     keys, and ``wall_s`` (this run's wall time). A run that raises returns ``{"error": ...}``
     (a crash is an outcome of the parameters, never hides the other cells).
     """
-    from app.runs import run, summarize
+    from pelvic_walk.core.run import run, summarize
 
     start = time.perf_counter()
     try:
@@ -385,3 +386,18 @@ def make_tasks(
     if measure == "summary":
         return [SummaryTask(cell, m, run=run) for cell in cells for m in methods]
     raise ValueError(f"unknown measure {measure!r}")
+
+
+def check_runs(grid: Grid) -> None:
+    """Every cell's parameters are valid together for every method at every length it may
+    run (e.g. a horizon shorter than the MPC sample); GridError naming the cell otherwise."""
+    lengths: tuple[float | None, ...] = (
+        (SEARCH_MIN, SEARCH_MAX) if grid.measure == "limit" else (None,)
+    )
+    for cell in grid.cells():
+        for method in grid.methods:
+            for x in lengths:
+                try:
+                    cell.spec(method, x).params()
+                except ValueError as exc:
+                    raise GridError(f"cell {cell.label}: {exc}") from None

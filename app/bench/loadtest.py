@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING, Any, cast
 
 import httpx
 
-from app.local_server import local_server, wait_healthy
+from app.bench.local_server import local_server, wait_healthy
 from controller.strategy import FIXED, MPC, REDUNDANCY
 
 if TYPE_CHECKING:

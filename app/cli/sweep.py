@@ -15,10 +15,15 @@ import sys
 import time
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import Any
 
-from app.params_cli import add_strategy_argument, positive_int, split_list
-from app.sweep.grid import (
+from app.cli.options import (
+    add_jobs_argument,
+    add_ray_argument,
+    add_set_argument,
+    add_strategy_argument,
+)
+from pelvic_walk.core.grid import (
     MEASURES,
     Grid,
     GridError,
@@ -27,6 +32,7 @@ from app.sweep.grid import (
     make_grid,
     parse_sets,
 )
+from pelvic_walk.core.params import split_list
 
 PROG = "pelvic-walk sweep"
 DEFAULT_OUT = Path("sweep")
@@ -42,16 +48,7 @@ def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
         help="a YAML or JSON grid: {GROUP.NAME: [V1, V2, ...], ..., methods: [...], "
         "measure: limit|summary, fixed: {GROUP.NAME: V}}",
     )
-    parser.add_argument(
-        "--set",
-        dest="grid_set",
-        action="extend",
-        nargs="+",
-        default=[],
-        metavar="GROUP.NAME=V1,V2,...",
-        help="an axis of the grid: any parameter of controller/params.py and its values, "
-        "separated by commas or spaces (repeatable; one value = fixed)",
-    )
+    add_set_argument(parser, grid=True)
     parser.add_argument(
         "--methods",
         nargs="+",
@@ -76,23 +73,8 @@ def add_sweep_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="DIR",
         help=f"output folder (default {DEFAULT_OUT}/)",
     )
-    parser.add_argument(
-        "--jobs",
-        type=positive_int,
-        default=None,
-        metavar="J",
-        help="worker processes (default: the CPU count); with --ray and no "
-        "address, the local Ray instance's CPUs",
-    )
-    parser.add_argument(
-        "--ray",
-        nargs="?",
-        const="",
-        default=None,
-        metavar="ADDRESS",
-        help="run on Ray: a cluster at ADDRESS, or without one a local Ray instance "
-        "(pip install 'pelvic-walk[cluster]')",
-    )
+    add_jobs_argument(parser)
+    add_ray_argument(parser)
 
 
 def grid_from_args(args: argparse.Namespace) -> Grid:
@@ -106,36 +88,6 @@ def grid_from_args(args: argparse.Namespace) -> Grid:
     if args.grid is not None:
         return grid_from_file(args.grid, methods=methods, measure=args.measure)
     return make_grid(parse_sets(sets), methods=methods, measure=args.measure)
-
-
-def check_runs(grid: Grid) -> None:
-    """Every cell's parameters are valid together for every method at every length it may
-    run (e.g. a horizon shorter than the MPC sample); GridError naming the cell otherwise."""
-    from app.sweep.measure import SEARCH_MAX, SEARCH_MIN
-
-    lengths: tuple[float | None, ...] = (
-        (SEARCH_MIN, SEARCH_MAX) if grid.measure == "limit" else (None,)
-    )
-    for cell in grid.cells():
-        for method in grid.methods:
-            for x in lengths:
-                try:
-                    cell.spec(method, x).params()
-                except ValueError as exc:
-                    raise GridError(f"cell {cell.label}: {exc}") from None
-
-
-def check_out(out: Path) -> str | None:
-    """A one-line complaint if ``out`` cannot be a writable folder (creates it otherwise)."""
-    if out.exists() and not out.is_dir():
-        return f"--out {out}: is a file, not a folder"
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        return f"--out {out}: cannot create it ({exc.strerror or exc})"
-    if not os.access(out, os.W_OK | os.X_OK):
-        return f"--out {out}: not writable"
-    return None
 
 
 def command_of(args: argparse.Namespace) -> str:
@@ -187,19 +139,21 @@ def sweep_main(args: argparse.Namespace) -> int:
         print(f"{PROG}: error: {message}", file=sys.stderr)
         return 2
 
+    from pelvic_walk.core import sweep_output as output
+    from pelvic_walk.core.measure import check_runs
+
     try:
         grid = grid_from_args(args)
         check_runs(grid)
     except GridError as exc:
         return fail(exc)
     out = Path(args.out)
-    problem = check_out(out)
+    problem = output.check_out(out)
     if problem:
         return fail(problem)
 
-    from app.sweep import output
-    from app.sweep.engine import make_backend, run_tasks
-    from app.sweep.measure import make_tasks
+    from pelvic_walk.core.engine import make_backend, run_tasks
+    from pelvic_walk.core.measure import make_tasks
 
     jobs = args.jobs or os.cpu_count() or 1
     tasks = make_tasks(grid.cells(), grid.methods, grid.measure)
@@ -243,29 +197,3 @@ def sweep_main(args: argparse.Namespace) -> int:
         print(_describe(grid, row))
     print(f"wrote {out / output.TABLE_CSV} ({len(rows)} rows, {n_runs} runs, {duration:.0f} s)")
     return 1 if n_errors else 0
-
-
-class _Parser(argparse.ArgumentParser):
-    """argparse that reports errors on one line (no usage dump) and exits 2."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f"{self.prog}: error: {message}\n")
-
-
-def build_parser(prog: str = PROG) -> argparse.ArgumentParser:
-    parser = _Parser(
-        prog=prog,
-        description="A parameter grid over walking methods: each "
-        "cell's step-length limits or run summary, as one tidy table and figures.",
-    )
-    add_sweep_arguments(parser)
-    return parser
-
-
-def main(argv: list[str] | None = None) -> int:
-    """``python -m app.sweep ...``: the same as ``pelvic-walk sweep ...``."""
-    args = build_parser().parse_args(argv)
-    try:
-        return sweep_main(args)
-    except KeyboardInterrupt:
-        return 130

@@ -1,7 +1,8 @@
 """The run engine of ``pelvic-walk sweep`` and ``pelvic-walk experiments``: jobs on a backend.
 
 A *job* is a module-level function and its plain-data arguments (a
-:class:`~app.run_spec.RunSpec`, numbers, strings): it crosses process and Ray boundaries as
+:class:`~pelvic_walk.core.run_spec.RunSpec`, numbers, strings): it crosses process and Ray
+boundaries as
 it is, and the worker builds its own MuJoCo and Pinocchio objects. A *task* asks for jobs one
 at a time (a limit search's next length depends on the last outcome); a list of independent
 jobs is a task per job (:class:`OneJob`). :func:`run_tasks` keeps one job in flight per task and

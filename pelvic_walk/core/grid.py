@@ -11,7 +11,7 @@ A grid comes from repeated ``--set GROUP.NAME=V1,V2,...`` options or from a YAML
     measure: limit                    # optional; limit | summary (default limit)
 
 Any field of ``controller/params.py`` can be named by its dotted name; each value is converted
-and range-checked by :func:`app.params_cli.parse_assignment`, the same check as ``simulate
+and range-checked by :func:`app.cli.options.parse_assignment`, the same check as ``simulate
 --set``. The cells are the cartesian product of the axes (the first axis varies slowest); an
 axis of one value counts as fixed. Every problem raises :class:`GridError` with one line.
 """
@@ -25,10 +25,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from app.params_cli import parse_assignment, split_list
-from app.run_spec import RunSpec
 from controller import strategy
 from controller.params import ControllerParams
+from pelvic_walk.core.params import parse_assignment, split_list
+from pelvic_walk.core.run_spec import RunSpec
 
 MEASURES = ("limit", "summary")
 DEFAULT_MEASURE = "limit"

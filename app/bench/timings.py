@@ -3,8 +3,10 @@
 
 Everything comes from one invocation, on one robot, headless:
 
-1. **Closed loop** (the measured figures): one :class:`app.runs.Session`, method ``mpc``, arms
-   on, step 0.3 m, QP back-end ``daqp`` (the default), stepped exactly as :func:`app.runs.run`
+1. **Closed loop** (the measured figures): one :class:`pelvic_walk.core.run.Session`, method
+   ``mpc``, arms
+   on, step 0.3 m, QP back-end ``daqp`` (the default), stepped exactly as
+   :func:`pelvic_walk.core.run.run`
    steps it (controller tick, MuJoCo substeps, measurement). The initial stand before the first
    step (``t_start``, 0.8 s = 160 ticks) is the warm-up and is not measured; the next
    ``ticks`` ticks are. ``tick_ms_*`` time ``Walker.tick`` alone (all layers); ``layer_ms``
@@ -26,7 +28,7 @@ Everything comes from one invocation, on one robot, headless:
 4. **Peer** (``peer``): placo's walk loop (its walk pattern generator and whole-body
    kinematics QP, no physics) on our robot, in the same run, with our step timing and length,
    re-planning over a fixed horizon of a few steps as placo's walk example does, so its
-   re-planning tick does not grow with ``ticks`` (``app/bench_peer.py``, in an interpreter
+   re-planning tick does not grow with ``ticks`` (``app/bench/peer.py``, in an interpreter
    that has placo: ``--peer-python``, ``$PELVIC_WALK_PEER_PYTHON`` or the checkout's
    ``.venv-peers`` of ``make peers``; placo pins Pinocchio 3.8, so it lives in its own
    venv). The URDF it loads is written from our MJCF at run time (:func:`urdf_from_mjcf`).
@@ -59,12 +61,12 @@ import daqp
 import mujoco
 import numpy as np
 
-from app.runs import RunConfig, Session
-from app.sim.world import JOINTS, World
 from controller import strategy
 from controller.params import ControllerParams
 from controller.qp import INF, QP, QpSolver, frozen
 from controller.strategy import PelvisMpcStrategy
+from pelvic_walk.core.run import RunConfig, Session
+from pelvic_walk.core.world import JOINTS, World
 
 STEP_LENGTH = 0.3  # [m]
 METHOD = strategy.MPC
@@ -431,14 +433,14 @@ def peer_python() -> str | None:
     env = os.environ.get(PEER_PYTHON_ENV)
     if env:
         return env
-    made = Path(__file__).resolve().parents[1] / ".venv-peers" / "bin" / "python"
+    made = Path(__file__).resolve().parents[2] / ".venv-peers" / "bin" / "python"
     if made.exists():
         return str(made)
     return sys.executable if importlib.util.find_spec("placo") is not None else None
 
 
 def peer_loop(ticks: int, python: str | None = None) -> dict[str, Any]:
-    """placo's walk loop on our robot (``app/bench_peer.py``) in ``python``; our walking
+    """placo's walk loop on our robot (``app/bench/peer.py``) in ``python``; our walking
     timing, sizes and step length; {"installed": False} without placo."""
     import subprocess
     import tempfile
@@ -476,7 +478,7 @@ def peer_loop(ticks: int, python: str | None = None) -> dict[str, Any]:
             "warmup_ticks": _warmup_ticks(session),
             "ticks": ticks,
         }
-        script = Path(__file__).with_name("bench_peer.py")
+        script = Path(__file__).with_name("peer.py")
         done = subprocess.run(
             [python, str(script), json.dumps(cfg)], capture_output=True, text=True, timeout=600
         )
