@@ -18,7 +18,7 @@ import pytest
 import websockets
 from viser import __version__ as viser_version
 
-from app.local_server import local_server
+from app.bench.local_server import local_server
 from app.web.view import Display
 
 HTTP_S = 60.0

@@ -19,7 +19,7 @@ import pytest
 import websockets
 from viser import __version__ as viser_version
 
-from app.local_server import local_server
+from app.bench.local_server import local_server
 from app.web.addresses import ClientAddresses, parse_trusted
 
 WAIT_S = 90.0
