@@ -150,3 +150,18 @@ def test_the_scene_and_the_api_count_one_client_by_one_address_behind_a_proxy(be
         for s in scenes:
             s.close()
     assert "Traceback" not in behind_proxy.output(400)
+
+
+def test_a_proxy_nobody_trusted_is_named_once_in_the_log(caplog):
+    """Behind a proxy on this machine without --trusted-proxy every student is 127.0.0.1
+    (not limited): the server says so once, with the option to give."""
+    import logging
+
+    untrusted = ClientAddresses()
+    with caplog.at_level(logging.WARNING, logger="app.web.addresses"):
+        for _ in range(3):
+            assert untrusted.resolve("127.0.0.1", {"X-Forwarded-For": "203.0.113.5"}) == (
+                "127.0.0.1"
+            )
+    lines = [r.getMessage() for r in caplog.records]
+    assert len(lines) == 1 and "--trusted-proxy 127.0.0.1" in lines[0]
