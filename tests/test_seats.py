@@ -165,3 +165,94 @@ def test_a_proxy_nobody_trusted_is_named_once_in_the_log(caplog):
             )
     lines = [r.getMessage() for r in caplog.records]
     assert len(lines) == 1 and "--trusted-proxy 127.0.0.1" in lines[0]
+
+
+# -- through a small local reverse proxy -----------------------------------------------------
+class _Proxy:
+    """A reverse proxy in a thread: a loopback port relaying to ``upstream``, stamping each
+    connection's request head with ``X-Forwarded-For: <client>`` (as nginx's
+    ``$proxy_add_x_forwarded_for`` does, after what the client wrote); the websocket upgrade
+    and everything after it is relayed as bytes. ``client`` plays the browser's address."""
+
+    def __init__(self, upstream: int, client: str):
+        from app.bench.local_server import free_port
+
+        self.port, self.upstream, self.client = free_port(), upstream, client
+        self._loop = asyncio.new_event_loop()
+        started = threading.Event()
+        threading.Thread(target=self._serve, args=(started,), daemon=True).start()
+        assert started.wait(30)
+
+    def _serve(self, started: threading.Event) -> None:
+        asyncio.set_event_loop(self._loop)
+
+        async def pipe(reader, writer) -> None:
+            with contextlib.suppress(OSError, ConnectionError):
+                while data := await reader.read(65536):
+                    writer.write(data)
+                    await writer.drain()
+            writer.close()
+
+        async def handle(reader, writer) -> None:
+            up_reader, up_writer = await asyncio.open_connection("127.0.0.1", self.upstream)
+            head = await reader.readuntil(b"\r\n\r\n")
+            stamp = f"X-Forwarded-For: {self.client}\r\n\r\n".encode()
+            up_writer.write(head[:-2] + stamp)
+            await up_writer.drain()
+            await asyncio.gather(pipe(reader, up_writer), pipe(up_reader, writer))
+
+        async def main() -> None:
+            await asyncio.start_server(handle, "127.0.0.1", self.port)
+            started.set()
+            await asyncio.Event().wait()
+
+        with contextlib.suppress(RuntimeError):
+            self._loop.run_until_complete(main())
+
+    def stop(self) -> None:
+        self._loop.call_soon_threadsafe(self._loop.stop)
+
+
+def test_behind_a_local_reverse_proxy_each_browser_is_its_own_address(behind_proxy):
+    """Two students behind a real (small) reverse proxy on 127.0.0.1, each with a page port
+    and a scene port of the proxy: A's scene gets A's session through the proxy, A's second
+    scene-only connection waits (A's address holds its one), A's script is refused (429), B's
+    script gets a session."""
+    base = behind_proxy.base
+    proxies = {
+        who: (_Proxy(behind_proxy.port, ip), _Proxy(behind_proxy.viser_port, ip))
+        for who, ip in (("a", "198.51.100.30"), ("b", "198.51.100.31"))
+    }
+
+    def health() -> dict:
+        return httpx.get(f"{base}/api/health", timeout=HTTP_S).json()
+
+    def private() -> int:
+        return httpx.get(f"{base}/api/sessions", timeout=HTTP_S).json()["private_sessions"]
+
+    page_a, scene_a = proxies["a"]
+    page_b, _ = proxies["b"]
+    headers = {"Connection": "close"}  # one request a connection: each is stamped
+    scenes = [Scene(f"ws://127.0.0.1:{scene_a.port}/", "203.0.113.66")]  # A writes a lie
+    try:
+        _wait(lambda: private() == 1, "A's scene to get its session through the proxy")
+        scenes.append(Scene(f"ws://127.0.0.1:{scene_a.port}/", "203.0.113.67"))
+        _wait(lambda: health()["viewers_waiting"] == 1, "A's second connection to wait")
+        r = httpx.post(f"http://127.0.0.1:{page_a.port}/api/sessions", headers=headers,
+                       timeout=HTTP_S)  # fmt: skip
+        assert r.status_code == 429 and "198.51.100.30" in r.text, r.text
+        r = httpx.post(f"http://127.0.0.1:{page_b.port}/api/sessions", headers=headers,
+                       timeout=HTTP_S)  # fmt: skip
+        assert r.status_code == 201, r.text
+        httpx.delete(
+            f"{base}/api/sessions/mine",
+            headers={"Authorization": f"Bearer {r.json()['token']}"},
+            timeout=HTTP_S,
+        )
+    finally:
+        for s in scenes:
+            s.close()
+        for pair in proxies.values():
+            for p in pair:
+                p.stop()
+    assert "Traceback" not in behind_proxy.output(400)
