@@ -193,11 +193,13 @@ class StrategyError(RuntimeError):
     """A strategy failed at a tick (raised, or returned something that is not a rate).
 
     ``str(error)`` is one line: the message and where, e.g.
-    ``"ZeroDivisionError: float division by zero (my_pelvis.py:14)"``.
+    ``"ZeroDivisionError: float division by zero (my_pelvis.py:14)"``. ``step``: the
+    ``s.step`` of the failing tick (the step in progress, counted from 0 as
+    :attr:`StrategyInputs.step`; -1 before the first), the one every report of the stop names.
     """
 
-    def __init__(self, strategy: str, message: str, where: str):
-        self.strategy, self.message, self.where = strategy, message, where
+    def __init__(self, strategy: str, message: str, where: str, step: int = -1):
+        self.strategy, self.message, self.where, self.step = strategy, message, where, step
         super().__init__(f"{message} ({where})" if where else message)
 
 
@@ -244,7 +246,10 @@ _LOADED: dict[tuple[str, str | None], tuple[float, tuple[str, ...]]] = {}  # fil
 
 
 def _description(cls: type) -> str:
-    doc = inspect.getdoc(cls) or ""
+    """The first paragraph of the class's own docstring; "" without one (never a base
+    class's: ``inspect.getdoc`` would inherit :class:`PelvisStrategy`'s)."""
+    own = cls.__dict__.get("__doc__")
+    doc = inspect.cleandoc(own) if isinstance(own, str) else ""
     return " ".join(doc.split("\n\n")[0].split())
 
 
@@ -403,7 +408,9 @@ class Runner:
                 self._started = True
             rate = strategy.waist_rate(s)
         except Exception as exc:  # noqa: BLE001 - the user's code: contained, reported as theirs
-            raise StrategyError(self.info.name, _exc_line(exc), _where(exc, self.info)) from exc
+            raise StrategyError(
+                self.info.name, _exc_line(exc), _where(exc, self.info), s.step
+            ) from exc
         if rate is None:
             return None
         if isinstance(rate, bool) or not isinstance(rate, (int, float, np.floating, np.integer)):
@@ -412,6 +419,7 @@ class Runner:
                 f"waist_rate returned {type(rate).__name__} {_short(rate)}, not a number "
                 "[rad/s] or None",
                 self._definition(),
+                s.step,
             )
         rate = float(rate)
         if not math.isfinite(rate):
@@ -419,6 +427,7 @@ class Runner:
                 self.info.name,
                 f"waist_rate returned {rate}, not a finite number [rad/s] or None",
                 self._definition(),
+                s.step,
             )
         return rate
 

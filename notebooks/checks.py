@@ -17,6 +17,7 @@ import numpy as np
 import pelvic_walk as pw
 
 OK, NOT_YET, OPEN = "\u2713", "\u2717", "\u2026"
+PAPER_METHODS = ("fixed", "redundancy", "mpc")  # not a student's strategy
 
 
 class Verdict:
@@ -356,6 +357,16 @@ def stops_the_fixed_pelvis(answer: Any, run: pw.Run) -> bool | None:
 def clean_beside_mpc(mine: pw.Run, mpc: pw.Run) -> bool:
     """Your strategy walks cleanly where the MPC does (the same length and steps)."""
     s, m = mine.summary, mpc.summary
+    if mine.method in PAPER_METHODS or mine.method == mpc.method:
+        print(
+            f"{NOT_YET} that is the {mine.method!r} run, not your strategy's: pass your own "
+            "walk first, e.g. checks.clean_beside_mpc(mine, mpc) with "
+            "mine = pw.simulate(strategy=Mine, ...)"
+        )
+        return False
+    if mpc.method != "mpc":
+        print(f"{NOT_YET} the second run must be the MPC's: pw.simulate('mpc', ...)")
+        return False
     if (s["step_length"], s["steps_planned"]) != (m["step_length"], m["steps_planned"]):
         print(f"{NOT_YET} compare walks of the same length and steps")
         return False

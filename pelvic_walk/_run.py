@@ -238,10 +238,11 @@ class Run:
             else "incomplete"
         )
         le = s["landing_error_max"]
+        landing = f"{le * 100:.1f} cm" if le is not None else "- (none measured)"
         return (
             f"<Run {self.method}: {s['step_length']:.2f} m x {s['steps_planned']} steps, "
             f"{outcome}, {s['steps_completed']}/{s['steps_planned']} landed, landing error max "
-            f"{le * 100 if le is not None else math.nan:.1f} cm, waist max "
+            f"{landing}, waist max "
             f"{s['waist_yaw_max_deg']:.1f} deg, yaw momentum peak {s['yaw_momentum_peak']:.2f} "
             f"kg m^2/s, kappa(legs) max {s['condition_number_legs_max']:.0f}>"
         )

@@ -10,6 +10,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 from app.live import LiveSim
+from app.web.addresses import ClientAddresses
 from app.web.api import create_app
 from controller.params import ControllerParams
 from pelvic_walk.core.run import SUMMARY_KEYS
@@ -290,20 +291,26 @@ def test_pages(client):
 
 
 def test_run_manager_is_bounded():
-    """More than max_pending queued runs are refused (429 at the API), old records pruned."""
+    """More than per_client runs of one client, or max_pending of all, are refused (429 at the
+    API); the instructor (client None) is beyond both; old records pruned."""
     import threading
 
     from app.web.api.headless import RunBusy, RunManager
     from controller.params import ControllerParams
 
     params = ControllerParams()
-    manager = RunManager(max_pending=2, keep=3)
+    manager = RunManager(max_pending=3, keep=3, per_client=2)
     release = threading.Event()
     manager._work = lambda *_: release.wait(30)  # hold the worker: the runs stay pending
-    manager.submit(params, None)
-    manager.submit(params, None)
-    with pytest.raises(RunBusy):
-        manager.submit(params, None)
+    manager.submit(params, None, "a")
+    manager.submit(params, None, "a")
+    with pytest.raises(RunBusy, match="you have 2 headless runs"):
+        manager.submit(params, None, "a")
+    manager.submit(params, None, "b")  # a's share is full, not b's
+    with pytest.raises(RunBusy, match="clients have 3 headless runs"):
+        manager.submit(params, None, "c")
+    manager.submit(params, None, None)  # the instructor
+    assert "_client" not in str(manager.get(manager.submit(params, None, None)))
     release.set()
     manager.shutdown()
 
@@ -311,7 +318,7 @@ def test_run_manager_is_bounded():
     manager._work = lambda *_: None
     for i in range(5):  # finished records beyond `keep` are pruned on the next submit
         manager._runs[f"done{i}"] = {"id": f"done{i}", "status": "done"}
-    manager.submit(params, None)
+    manager.submit(params, None, "a")
     assert len(manager._runs) == 3
     manager.shutdown()
 
@@ -524,23 +531,43 @@ def test_with_an_instructor_anyone_reads(taught):
     assert "That instructor token is wrong" in taught.get("/?token=guess").text
 
 
-def test_the_instructors_page_carries_the_token_to_the_scene(taught):
-    from urllib.parse import parse_qs, quote, unquote, urlsplit
+def test_the_instructors_token_is_exchanged_once_for_an_httponly_cookie(live):
+    """/?token=T answers 303 to / with the instructor cookie (HttpOnly, SameSite=Strict): the
+    token is in no frame's address, no page, no redirect; the cookie then makes the page the
+    instructor's and changes the shared session through the API; a made-up cookie, the token
+    as the cookie or a wrong token do not."""
+    from app.web.auth import INSTRUCTOR_COOKIE, Instructor
 
-    page = taught.get(f"/?token={TOKEN}").text
-    assert "you drive the shared demo" in page
-    src = page.split('<iframe id="scene" src="', 1)[1].split('"', 1)[0]
-    websocket = parse_qs(urlsplit(src.replace("&amp;", "&")).query)["websocket"][0]
-    assert websocket.startswith("ws://") and parse_qs(urlsplit(unquote(websocket)).query) == {
-        "token": [TOKEN]
-    }
-    # only the scene's frame carries it: no link on the projected page, and the page takes
-    # it out of its address bar once read
-    rest = page.replace(src, "")
-    assert TOKEN not in rest and quote(TOKEN, safe="") not in rest
-    link = page.split("Scene in its own tab", 1)[0].rsplit('href="', 1)[1].split('"', 1)[0]
-    assert "token" not in link and "websocket" not in link
-    assert 'searchParams.delete("token")' in page and "history.replaceState" in page
+    app = create_app(live, viser_port=18765, instructor=Instructor(TOKEN))
+    with TestClient(app, follow_redirects=False) as browser:
+        r = browser.get(f"/?token={TOKEN}&lang=en")
+        assert r.status_code == 303 and r.headers["location"] == "/?lang=en"
+        set_cookie = r.headers["set-cookie"]
+        assert set_cookie.startswith(f"{INSTRUCTOR_COOKIE}=") and "HttpOnly" in set_cookie
+        assert "samesite=strict" in set_cookie.lower() and "max-age" not in set_cookie.lower()
+        assert TOKEN not in r.text + str(r.headers)
+        cookie = browser.cookies.get(INSTRUCTOR_COOKIE)
+        assert cookie and cookie != TOKEN
+        page = browser.get("/").text
+        assert "you drive the shared demo" in page
+        src = page.split('<iframe id="scene" src="', 1)[1].split('"', 1)[0]
+        assert src == "http://testserver:18765/"  # no token, no websocket address
+        assert TOKEN not in page and cookie not in page
+        # the cookie is the instructor's credential at the API too
+        assert browser.post("/api/sim/pause").status_code == 200
+        assert browser.post("/api/sim/resume").status_code == 200
+    for forged in ("made-up", TOKEN, ""):
+        with TestClient(app, cookies={INSTRUCTOR_COOKIE: forged}) as student:
+            assert "The <b>instructor</b> drives the shared demo" in student.get("/").text
+            assert student.post("/api/sim/pause").status_code == 401
+    with TestClient(app, follow_redirects=False) as guess:
+        r = guess.get("/?token=guess")
+        assert r.status_code == 303 and r.headers["location"] == "/?token_wrong=1"
+        assert INSTRUCTOR_COOKIE not in r.headers.get("set-cookie", "") and "guess" not in str(
+            r.headers
+        )
+        assert "That instructor token is wrong" in guess.get("/?token_wrong=1").text
+    app.state.runs.shutdown()
 
 
 def test_the_token_is_compared_in_constant_time(monkeypatch):
@@ -589,8 +616,8 @@ def test_a_served_tool_never_logs_the_token(tmp_path):
     env = {**os.environ, "PELVIC_WALK_INSTRUCTOR_TOKEN": TOKEN, "PELVIC_WALK_DISPLAY_NICE": "0"}
     with local_server(("--workers", "0"), env=env) as server:
         base = server.base
-        assert httpx.get(f"{base}/?token={TOKEN}", timeout=30).status_code == 200
-        assert httpx.get(f"{base}/?token={TOKEN}x", timeout=30).status_code == 200
+        assert httpx.get(f"{base}/?token={TOKEN}", timeout=30).status_code == 303
+        assert httpx.get(f"{base}/?token={TOKEN}x", timeout=30).status_code == 303
         auth = {"Authorization": f"Bearer {TOKEN}"}
         assert httpx.post(f"{base}/api/sim/pause", headers=auth, timeout=30).status_code == 200
         bad = {"Authorization": f"Bearer {TOKEN}x"}
@@ -862,3 +889,50 @@ def test_sessions_are_listed_and_addressed(client):
     assert client.get("/api/state", headers={"X-Pelvic-Session": "nope"}).status_code == 404
     assert client.post("/api/sessions").status_code == 409  # shared mode
     assert client.delete("/api/sessions/shared").status_code == 409
+
+
+def test_one_client_cannot_fill_everyones_run_queue(live):
+    """Four anonymous POST /api/runs from one address filled the shared queue and everyone got
+    429. Now: that address's share is full (429 with Retry-After and a line to act on, the
+    same line for every refused client), another address and the instructor still get 202;
+    a credential the server never gave makes no new client; a forwarded header from an
+    untrusted peer is ignored, from the trusted proxy it names the client."""
+    import threading
+
+    from app.web.api.headless import RunManager
+    from app.web.auth import Instructor
+
+    runs = RunManager(per_client=2, max_pending=8)
+    release = threading.Event()
+    runs._work = lambda *_: release.wait(60)  # the runs stay queued
+    body = {"method": "fixed", "walk": {"step_length": 0.2, "n_steps": 1}}
+    app = create_app(live, runs=runs, instructor=Instructor(TOKEN))
+    addresses = ClientAddresses("10.9.0.1")  # a proxy that no request below comes through
+    app2 = create_app(live, runs=runs, instructor=Instructor(TOKEN), addresses=addresses)
+    try:
+        student = TestClient(app, client=("192.0.2.10", 5000))
+        other = TestClient(app, client=("192.0.2.11", 5000))
+        assert [student.post("/api/runs", json=body).status_code for _ in range(2)] == [202] * 2
+        refused = [
+            student.post("/api/runs", json=body),
+            student.post("/api/runs", json=body, headers={"Authorization": "Bearer made-up"}),
+            student.post("/api/runs", json=body, headers={"X-Forwarded-For": "198.51.100.7"}),
+        ]
+        for r in refused:
+            assert r.status_code == 429, r.text
+            assert r.headers["retry-after"] == "10"
+            assert r.json()["detail"].startswith("you have 2 headless runs queued or running")
+        assert other.post("/api/runs", json=body).status_code == 202
+        teacher = {"Authorization": f"Bearer {TOKEN}"}
+        assert [
+            student.post("/api/runs", json=body, headers=teacher).status_code for _ in range(3)
+        ] == [202] * 3
+        # behind the trusted proxy each forwarded client has its own share
+        proxy = TestClient(app2, client=("10.9.0.1", 5000))
+        for ip in ("198.51.100.1", "198.51.100.2"):
+            fwd = {"X-Forwarded-For": f"203.0.113.99, {ip}"}  # the client's own claim, then ours
+            codes = [proxy.post("/api/runs", json=body, headers=fwd).status_code for _ in range(3)]
+            assert codes == [202, 202, 429], (ip, codes)
+    finally:
+        release.set()
+        runs.shutdown()

@@ -136,6 +136,12 @@ def test_the_instructors_lesson_shows_on_every_students_page_and_the_token_hides
             student, s_scene = _open(browser, f"{base}/")
             _until(lambda: TOKEN not in teacher.url, "the token to leave the address bar")
             assert TOKEN not in teacher.locator("nav").inner_html()
+            # nor in the page or the scene frame's address: exchanged for an HttpOnly cookie
+            assert TOKEN not in teacher.content()
+            assert TOKEN not in (teacher.locator("#scene").get_attribute("src") or "")
+            assert TOKEN not in str(teacher.context.cookies()) and not teacher.evaluate(
+                "document.cookie"
+            )
             t_scene.get_by_text("Instructor").first.wait_for()  # it still drives
             open_tab(t_scene, "Learn")
             open_tab(s_scene, "Learn")

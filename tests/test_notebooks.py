@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import importlib.util
 import math
+import re
 import sys
 import time
 from pathlib import Path
@@ -20,6 +21,9 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 NOTEBOOKS = ROOT / "notebooks"
 BOOKS = sorted(p.name for p in NOTEBOOKS.glob("*.ipynb"))
+# a number printed as nan (a student cannot read it); not the value a faulty strategy returned,
+# which its message names ("waist_rate returned nan, not a finite number")
+NAN = re.compile(r"(?<!returned )\bnan\b", re.IGNORECASE)
 CELL_TIMEOUT_S = 900  # a cell's walks on a loaded machine; the lessons take ~30 s unloaded
 
 
@@ -64,6 +68,16 @@ def test_notebook_runs_top_to_bottom(name, capsys):
     ]
     verdicts = [line for text in printed for line in text.splitlines() if line[:1] in "✓✗…"]
     assert verdicts, f"{name}: no exercise check ran"
+    shown = printed + [  # what a cell prints and the reprs it ends with (a table's missing
+        # value, pandas' NaN in a DataFrame, is a table's convention: not checked here)
+        out.get("data", {}).get("text/plain", "")
+        for cell in book.cells
+        if cell.cell_type == "code"
+        for out in cell.outputs
+        if out.output_type == "execute_result" and "text/html" not in out.get("data", {})
+    ]
+    nans = [line for text in shown for line in text.splitlines() if NAN.search(line)]
+    assert not nans, f"{name}: a number printed as nan: {nans[:3]}"
     with capsys.disabled():
         print(f"\n{name}: {wall:.1f} s wall, {len(verdicts)} checks")
 
@@ -136,7 +150,7 @@ def test_checks_of_runs_read_the_runs(capsys):
     assert checks.clean_at_long_step({"mpc"}, [fixed, walk]).ok is False
     a, b = walk.summary["yaw_momentum_peak"], fixed.summary["yaw_momentum_peak"]
     assert checks.arms_share(100 * (1 - a / b), walk, fixed).ok is True
-    assert checks.clean_beside_mpc(fixed, walk).ok is True
+    assert checks.clean_beside_mpc(fixed, walk).ok is False  # a paper's method, not yours
     assert checks.shortest_walking_horizon(1.6, {1.6: walk}).ok is True
     assert checks.stopped_at(1.0, walk).ok is False  # nothing stopped it
     capsys.readouterr()
@@ -183,3 +197,90 @@ def test_checks_of_a_stopped_strategy():
     assert checks.stopped_at(run.column("t")[-1], run).ok is True
     assert checks.stopped_at(0.5, run).ok is False
     assert checks.clean_beside_mpc(run, run).ok is False
+
+
+def test_exercise_5_1_is_passed_by_a_students_strategy_not_by_the_references_run(capsys):
+    """The MPC's own run (or another of the paper's methods) passed in as the student's is
+    refused; a student's strategy that walks cleanly passes."""
+    import pelvic_walk as pw
+    from controller import strategy
+
+    checks = _checks()
+    mpc = pw.simulate("mpc", step_length=0.3, steps=2)
+
+    class Still(pw.PelvisStrategy):
+        name = "nb_still"
+
+        def waist_rate(self, s):
+            return 0.0
+
+    try:
+        mine = pw.simulate(strategy=Still, step_length=0.3, steps=2)
+    finally:
+        strategy.unregister("nb_still")
+    capsys.readouterr()
+    assert checks.clean_beside_mpc(mpc, mpc).ok is False
+    assert "not your strategy's" in capsys.readouterr().out
+    assert checks.clean_beside_mpc(mine, mine).ok is False  # the second must be the MPC's
+    assert checks.clean_beside_mpc(mine, mpc).ok is True
+
+
+def test_a_run_stopped_before_its_first_landing_prints_no_nan():
+    """Notebook 5's buggy example: a walk its strategy stopped before any landing error was
+    measured says so, never "nan"."""
+    import pelvic_walk as pw
+    from controller import strategy
+
+    class Early(pw.PelvisStrategy):
+        name = "nb_early"
+
+        def waist_rate(self, s):
+            return float("nan") if s.step == 0 else 0.0
+
+    try:
+        run = pw.simulate(strategy=Early, step_length=0.2, steps=2)
+    finally:
+        strategy.unregister("nb_early")
+    assert run.summary["landing_error_max"] is None
+    text = repr(run)
+    assert "nan" not in text.lower(), text
+    assert "landing error max - (none measured)" in text
+
+
+def test_the_notebook_extra_installs_nbconvert():
+    """`pip install -e '.[notebook]'` brings `jupyter nbconvert` (most courses run and grade
+    notebooks with it)."""
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    extras = project["optional-dependencies"]
+    assert any(d.startswith("nbconvert") for d in extras["notebook"])
+    assert any(d.startswith("nbconvert") for d in extras["test"])  # for the test below
+
+
+@pytest.mark.slow
+def test_a_notebook_runs_through_jupyter_nbconvert(tmp_path):
+    """Lesson 5 (a student's strategy, a buggy one, the checks) as a course runs it:
+    `jupyter nbconvert --to notebook --execute`; no error, its checks print, no nan."""
+    import subprocess
+
+    import nbformat
+
+    name = "05_your_own_pelvis.ipynb"
+    jupyter = Path(sys.executable).with_name("jupyter")
+    done = subprocess.run(
+        [str(jupyter), "nbconvert", "--to", "notebook", "--execute", f"--output-dir={tmp_path}",
+         f"--ExecutePreprocessor.timeout={CELL_TIMEOUT_S}", str(NOTEBOOKS / name)],
+        capture_output=True, text=True, timeout=3 * CELL_TIMEOUT_S, cwd=tmp_path,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stderr[-3000:]
+    book = nbformat.read(tmp_path / name, as_version=4)
+    outputs = [o for c in book.cells if c.cell_type == "code" for o in c.outputs]
+    assert not [o for o in outputs if o.output_type == "error"]
+    text = "\n".join(
+        o.get("text", "") or o.get("data", {}).get("text/plain", "")
+        for o in outputs
+        if "text/html" not in o.get("data", {})  # (tables: pandas' NaN is a missing value)
+    )
+    assert "STOPPED by its strategy" in text and ("✓" in text or "✗" in text)
+    assert not NAN.search(text), text

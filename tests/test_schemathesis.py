@@ -5,8 +5,8 @@ The app (around a real :class:`LiveSim` with short plans) is served by uvicorn o
 localhost port in a thread of this process; schemathesis's command line runs in a subprocess
 with the phases examples, coverage and fuzzing, only the ``not_a_server_error`` check and a
 ``MAX_TIME_S`` budget. The headless runs that ``POST /api/runs`` starts are real but stopped
-after ``RUN_WALL_S`` of wall time each, and the server refuses more than four pending ones (429),
-so the fuzzing cannot exhaust the machine.
+after ``RUN_WALL_S`` of wall time each, and the server refuses more than two pending ones of one
+client (429), so the fuzzing cannot exhaust the machine.
 """
 
 from __future__ import annotations

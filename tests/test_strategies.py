@@ -381,3 +381,68 @@ def test_a_strategy_imports_a_module_beside_it_and_takes_a_free_colour(tmp_path)
     finally:
         for n in names:
             strategy.unregister(n)
+
+
+STOPS_AT_STEP_3 = """
+from pelvic_walk import PelvisStrategy
+
+
+class AtThree(PelvisStrategy):
+    name = "at_three"
+
+    def waist_rate(self, s):
+        if s.step == 3:
+            raise ValueError("stop at step 3")
+        return 0.0
+
+
+class Undocumented(PelvisStrategy):
+    name = "undocumented"
+
+    def waist_rate(self, s):
+        return 0.0
+"""
+
+
+def test_a_strategy_stopped_at_step_3_is_said_stopped_at_step_3_everywhere(user_file, capsys):
+    """One count of steps, s.step's (from 0): a strategy raised at s.step == 3 stopped in
+    step 3 after 3 steps (0, 1, 2) had landed, in the summary, the command line, a live
+    robot's frame and /api/state (it was "step 2" and "2/10 steps": the last landing is
+    measured half a DSP after touch-down, after the stop)."""
+    from fastapi.testclient import TestClient
+
+    from app.web.api import create_app
+
+    path = user_file(STOPS_AT_STEP_3, name="at_three", file="at_three.py")
+    strategy.load_file(f"{path}:AtThree")
+    params = ControllerParams().replace(method="at_three", walk={"step_length": 0.2, "n_steps": 10})
+    s = summarize(run(RunConfig(params=params)))
+    assert s["strategy_error"].startswith("ValueError: stop at step 3")
+    assert s["strategy_error_step"] == 3
+    assert (s["steps_completed"], s["steps_planned"]) == (3, 10)
+    capsys.readouterr()
+    cli_main(["simulate", "--strategy", f"{path}:AtThree", "--step-length", "0.2", "--steps", "10"])
+    out = capsys.readouterr().out
+    assert "3/10 steps" in out and "in step 3 (s.step): ValueError: stop at step 3" in out
+
+    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 10}), methods=["at_three"],
+                  speed=4.0, sleep=lambda _s: None)  # fmt: skip
+    with TestClient(create_app(sim)) as client:
+        sim.start()
+        try:
+            f = sim.wait_frame(timeout=60)
+            while f is not None and f.robot("at_three").error is None:
+                f = sim.wait_frame(f.seq, timeout=60)
+            assert f is not None and f.robot("at_three").step_index == 3
+            robot = client.get("/api/state").json()["robots"][0]
+            assert robot["status"] == "stopped" and robot["step_index"] == 3
+        finally:
+            sim.stop()
+
+
+def test_a_class_without_a_docstring_is_described_by_nothing(user_file):
+    """Not by the base class's docstring ("Base class of a pelvis strategy: ...")."""
+    path = user_file(STOPS_AT_STEP_3, name="undocumented", file="undocumented.py")
+    strategy.load_file(f"{path}:Undocumented")
+    assert strategy.info("undocumented").description == ""
+    assert strategy.info(strategy.MPC).description  # the built-ins keep theirs

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from app.web.server import private_room_line
@@ -86,3 +88,15 @@ def test_falls_count_from_the_last_restart_asked_for():
     assert run_to(frames[-1].clock + 0.3).falls == 0
     fall()
     assert run_to(frames[-1].clock + 0.1).falls == 1
+
+
+def test_lesson_2_points_at_the_button_that_stops_with_both_feet_down():
+    """The double support lasts 0.24 s at lesson 2's 1.2 s steps: a student cannot press Pause
+    inside it by hand; the lesson names the panel's "to landing" step that stops there."""
+    import app.web.panel
+    from app.web.lessons import LESSONS
+
+    lesson = next(x for x in LESSONS if x.title.startswith("2."))
+    assert "Step: to landing" in lesson.watch
+    panel = Path(app.web.panel.__file__).read_text()
+    assert '"Step", ("5 ms tick", "to lift-off", "to landing")' in panel  # the button exists

@@ -64,7 +64,7 @@ def test_the_page_names_routes_that_work_in_its_mode(live):
 
 def test_lesson_two_says_where_to_lift_off_stops_and_what_the_camera_does():
     lesson = LESSONS[1]
-    assert "while both feet are down" in lesson.watch
+    assert "with both feet down" in lesson.watch and "Step: to landing" in lesson.watch
     assert "first instant" in lesson.watch and "SSP" in lesson.watch
 
 

@@ -166,6 +166,16 @@ def build_parser() -> argparse.ArgumentParser:
         "Bearer TOKEN') change the shared demo; students watch it (or drive their private "
         "sessions). PELVIC_WALK_INSTRUCTOR_TOKEN keeps it out of the process list",
     )
+    p.add_argument(
+        "--trusted-proxy",
+        action="append",
+        default=None,
+        dest="trusted_proxies",
+        metavar="ADDR",
+        help="behind a reverse proxy: its address (or network, e.g. 10.0.0.0/24; repeat for "
+        "more); from it, and only from it, X-Forwarded-For names the client, for the page, "
+        "the API and the scene alike (docs/TEACHING.md, 'Behind a reverse proxy')",
+    )
 
     p = sub.add_parser(
         "simulate",
@@ -376,7 +386,12 @@ def _simulate(args: argparse.Namespace) -> int:
         why = unsuccessful_text(summary["unsuccessful"], le, summary["solver_failure_share"])
         print(f"not a success: {why}")
     if summary["strategy_error"]:
-        print(f"stopped at t = {summary['strategy_error_time']:.3f} s: {summary['strategy_error']}")
+        step = summary.get("strategy_error_step")
+        where = f" in step {step} (s.step)" if step is not None and step >= 0 else ""
+        print(
+            f"stopped at t = {summary['strategy_error_time']:.3f} s{where}: "
+            f"{summary['strategy_error']}"
+        )
     tick_ms = params.control_dt * 1e3
     if summary["strategy_ms_median"] > tick_ms:
         print(
@@ -477,6 +492,7 @@ def main(argv: list[str] | None = None) -> int:
                 args.instructor_token,
                 args.strategies,
                 sessions_per_address=args.sessions_per_address,
+                trusted_proxies=args.trusted_proxies,
             )
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main

@@ -9,13 +9,18 @@ Who is the instructor:
 - through the HTTP API, a request carrying ``Authorization: Bearer T``; a request that would
   change the shared session without it gets 401, with a wrong token 403, each with a line
   saying what to do (``app.web.api.live``);
-- in the browser, the page opened as ``/?token=T``: it frames the 3-D scene with the token in
-  the scene's websocket address (viser's client takes its websocket URL from its ``websocket``
-  query parameter), and the display reads it when the browser connects (:func:`client_token`).
+- in the browser, the page opened once as ``/?token=T``: the token is exchanged for the
+  *instructor cookie* (:data:`INSTRUCTOR_COOKIE`: a fresh random credential, HttpOnly,
+  SameSite=Strict, for this browser's session) and the browser is sent on to ``/`` (303), so
+  the token is in no frame's address, no page, no later request and no history entry. The
+  cookie goes with the scene's websocket too (cookies know no ports): the display reads it
+  when the browser connects (:func:`client_instructor`), and the API accepts it as it accepts
+  the bearer token.
 
 The token is compared in constant time (:func:`hmac.compare_digest`) and never logged: the
 web server's access log is off, and :class:`RedactTokens` blanks ``token=...`` in any record
-of the loggers that could print a URL.
+of the loggers that could print a URL. The cookies the instructor's browsers were given are
+kept in memory only (a restarted server asks for the token again).
 
 A private session's holder (``app.live.registry``): a browser is known by its *seat cookie*
 (:data:`SEAT_COOKIE`, HttpOnly, set by the page ``/`` in private mode). Cookies belong to a
@@ -31,14 +36,16 @@ import hmac
 import logging
 import re
 import secrets
+import threading
 from http.cookies import CookieError, SimpleCookie
 from typing import Any
-from urllib.parse import parse_qs, urlsplit
 
 from fastapi.security import HTTPBearer
 
 TOKEN_PARAM = "token"
 SEAT_COOKIE = "pelvic_walk_seat"  # a browser's credential for its private session
+INSTRUCTOR_COOKIE = "pelvic_walk_instructor"  # the instructor's browser, once it gave the token
+MAX_INSTRUCTOR_COOKIES = 32  # browsers the instructor opened the page in (the oldest forgotten)
 _TOKEN_IN_TEXT = re.compile(r"(token=)[^&\s\"']+", re.IGNORECASE)
 _BEARER_IN_TEXT = re.compile(r"(bearer\s+)\S+", re.IGNORECASE)
 URL_LOGGERS = (  # a logger's filters see only its own records, not its children's
@@ -75,6 +82,8 @@ class Instructor:
         if token is not None and not token.strip():
             raise ValueError("the instructor token is empty")
         self._token = token.encode("utf-8") if token is not None else None
+        self._cookies: list[bytes] = []  # given to the instructor's browsers, newest last
+        self._lock = threading.Lock()
 
     @property
     def enabled(self) -> bool:
@@ -86,6 +95,25 @@ class Instructor:
         if self._token is None or candidate is None:
             return False
         return hmac.compare_digest(candidate.encode("utf-8"), self._token)
+
+    def issue_cookie(self) -> str:
+        """A fresh instructor cookie's value, for a browser that has just given the token."""
+        value = new_credential()
+        with self._lock:
+            self._cookies = [*self._cookies, value.encode("utf-8")][-MAX_INSTRUCTOR_COOKIES:]
+        return value
+
+    def is_cookie(self, candidate: str | None) -> bool:
+        """True if ``candidate`` is an instructor cookie this server gave (constant time)."""
+        if self._token is None or not candidate:
+            return False
+        given = candidate.encode("utf-8")
+        with self._lock:
+            cookies = list(self._cookies)
+        found = False
+        for c in cookies:  # every one compared: the time tells nothing about which
+            found |= hmac.compare_digest(given, c)
+        return found
 
     def __repr__(self) -> str:  # never the token itself
         return f"Instructor(enabled={self.enabled})"
@@ -101,18 +129,9 @@ def _connection(server: Any, client: Any) -> Any:
         return None
 
 
-def client_token(server: Any, client: Any) -> str | None:
-    """The ``token`` query parameter of the websocket a viser client connected with, or None."""
-    try:
-        path = _connection(server, client).request.path
-    except AttributeError:
-        return None
-    values = parse_qs(urlsplit(path).query).get(TOKEN_PARAM)
-    return values[0] if values else None
-
-
-def seat_of(cookie_header: str | None) -> str | None:
-    """The seat cookie's value in a ``Cookie`` header, or None (none, or malformed)."""
+def seat_of(cookie_header: str | None, name: str = SEAT_COOKIE) -> str | None:
+    """The seat cookie's (or cookie ``name``'s) value in a ``Cookie`` header, or None (none,
+    or malformed)."""
     if not cookie_header:
         return None
     try:
@@ -120,8 +139,17 @@ def seat_of(cookie_header: str | None) -> str | None:
         jar.load(cookie_header)
     except CookieError:
         return None
-    morsel = jar.get(SEAT_COOKIE)
+    morsel = jar.get(name)
     return morsel.value if morsel is not None and morsel.value else None
+
+
+def client_instructor(server: Any, client: Any) -> str | None:
+    """The instructor cookie the browser of a viser client sent with its websocket, or None."""
+    try:
+        headers = _connection(server, client).request.headers
+        return seat_of(headers.get("Cookie"), INSTRUCTOR_COOKIE)
+    except AttributeError:
+        return None
 
 
 def client_seat(server: Any, client: Any) -> str | None:
@@ -133,8 +161,18 @@ def client_seat(server: Any, client: Any) -> str | None:
         return None
 
 
+def client_headers(server: Any, client: Any) -> Any:
+    """The HTTP headers of a viser client's websocket request, or None."""
+    try:
+        return _connection(server, client).request.headers
+    except AttributeError:
+        return None
+
+
 def client_address(server: Any, client: Any) -> str | None:
-    """The network address a viser client connected from, or None."""
+    """The network address a viser client's socket connected from (the peer: behind a
+    proxy, the proxy's; :class:`app.web.addresses.ClientAddresses` reads the client's), or
+    None."""
     try:
         return str(_connection(server, client).remote_address[0])
     except (AttributeError, IndexError, TypeError):

@@ -141,8 +141,9 @@ LESSONS: tuple[Lesson, ...] = (
         {"step_length": 0.40, "step_time": 1.2},
         (MPC,),
         "top",
-        "Press <b>Pause</b> while both feet are down (phase <i>DSP</i> in the table above) "
-        "and open the <b>Inspect</b> tab: the reference angle "
+        "Press <b>Pause</b>, then <b>Step: to landing</b> (Playback): it stops the instant "
+        "a foot lands, with both feet down (phase <i>DSP</i> in the table above), which lasts "
+        "only 0.24 s. Open the <b>Inspect</b> tab: the reference angle "
         "(eq. 30-31) already sees the next footholds over the 1.6 s horizon, and the MPC's "
         "plan (eq. 37) turns the pelvis toward the coming swing before the foot lifts (its "
         "rate reverses in the DSP). <b>Step: to lift-off</b> stops at the first instant the "

@@ -45,6 +45,7 @@ from app.live.intent import DEFAULT_METHODS
 from app.live.pool import WorkerPool
 from app.live.registry import SessionRegistry
 from app.live.session import initial_intent
+from app.web.addresses import ClientAddresses
 from app.web.api import create_app
 from app.web.auth import Instructor, redact_logs
 from app.web.settings import Settings, worker_layout
@@ -132,6 +133,7 @@ def serve(
     instructor_token: str | None = None,
     strategies: list[str] | None = None,
     sessions_per_address: int | None = None,
+    trusted_proxies: list[str] | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
@@ -156,6 +158,7 @@ def serve(
         "shared_demo": shared_demo,
         "instructor_token": instructor_token,
         "sessions_per_address": sessions_per_address,
+        "trusted_proxies": trusted_proxies,
     }
     try:  # the command line over the environment over the defaults, checked in one place
         settings = Settings(**{k: v for k, v in given.items() if v is not None})
@@ -205,13 +208,15 @@ def serve(
         shared_demo=settings.shared_demo,
         per_address=settings.sessions_per_address,
     )
-    display = Display(viser_server, registry, display_hz, instructor).start()
+    addresses = ClientAddresses(settings.trusted_proxies)  # one source: page, API, scene
+    display = Display(viser_server, registry, display_hz, instructor, addresses).start()
     app = create_app(
         registry,
         viser_port=viser_port,
         report_dir=report_dir,
         health_extra=display.health,
         instructor=instructor,
+        addresses=addresses,
     )
     if pool is not None:
         # the main thread (uvicorn, and the API's worker threads it starts) keeps its
@@ -219,7 +224,11 @@ def serve(
         keep = pool.receiver_thread_ids() | {threading.get_native_id()}
         lower_priority(settings.display_nice, keep=keep)
     redact_logs()  # a URL with ?token= never reaches a log (the access log is off anyway)
-    config = uvicorn.Config(app, host=host, port=port, log_level="warning", access_log=False)
+    # proxy_headers off: forwarded headers are read by app.web.addresses alone, from the
+    # trusted proxies only, for the API and the scene alike
+    config = uvicorn.Config(
+        app, host=host, port=port, log_level="warning", access_log=False, proxy_headers=False
+    )
     server = uvicorn.Server(config)
     shown = f"[{host}]" if ":" in host else host
     demo = "" if settings.shared_demo else ", no shared demo"

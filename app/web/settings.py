@@ -4,10 +4,10 @@
 ``PELVIC_WALK_HOST``, ``PELVIC_WALK_PORT``, ``PELVIC_WALK_VISER_PORT``,
 ``PELVIC_WALK_REPORT_DIR``, ``PELVIC_WALK_WORKERS``, ``PELVIC_WALK_SESSIONS``,
 ``PELVIC_WALK_ROBOTS_PER_WORKER``, ``PELVIC_WALK_DISPLAY_HZ``, ``PELVIC_WALK_DISPLAY_NICE``,
-``PELVIC_WALK_IDLE_TIMEOUT``, ``PELVIC_WALK_SHARED_DEMO``, ``PELVIC_WALK_SESSIONS_PER_ADDRESS``
-and ``PELVIC_WALK_INSTRUCTOR_TOKEN`` override the defaults; command-line options override
-both. (The environment keeps the token out of the process list, where ``--instructor-token``
-shows.)
+``PELVIC_WALK_IDLE_TIMEOUT``, ``PELVIC_WALK_SHARED_DEMO``, ``PELVIC_WALK_SESSIONS_PER_ADDRESS``,
+``PELVIC_WALK_TRUSTED_PROXIES`` and ``PELVIC_WALK_INSTRUCTOR_TOKEN`` override the defaults;
+command-line options override both. (The environment keeps the token out of the process list,
+where ``--instructor-token`` shows.)
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ from pydantic import Field, SecretStr, field_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from app.live.intent import DEFAULT_METHODS
+from app.web.addresses import parse_trusted
 
 # Robots a core keeps at 1.0x with the web process and 20 viewers on the same machine, measured
 # with `serve --sessions private` + `loadtest --viewers 20` (docs/PERFORMANCE.md, "Capacity":
@@ -85,6 +86,20 @@ class Settings(BaseSettings):
     # with it, only the instructor (the page opened with ?token=..., the API with
     # "Authorization: Bearer ...") changes the shared demo; SecretStr: never printed
     instructor_token: SecretStr | None = Field(default=None, min_length=1)
+    # behind a reverse proxy: its addresses or networks, comma separated; from them (only)
+    # X-Forwarded-For names the client, for the page, the API and the scene alike
+    # (app.web.addresses)
+    trusted_proxies: str = ""
+
+    @field_validator("trusted_proxies", mode="before")
+    @classmethod
+    def _proxies(cls, value: object) -> object:
+        """A list (``--trusted-proxy`` repeated) or a comma-separated string, each checked."""
+        if isinstance(value, (list, tuple)):
+            value = ",".join(str(v) for v in value)
+        if isinstance(value, str):
+            parse_trusted(value)  # ValueError names the bad entry
+        return value
 
     @field_validator("instructor_token", mode="before")
     @classmethod

@@ -3,8 +3,9 @@
 - In ``shared`` mode there is one view on the viser server itself: every browser sees the same
   scene and GUI, and every control acts on the shared session.
 - With an instructor (``serve --instructor-token``), each browser gets its own view of the
-  shared session (viser's per-client scene and GUI): the instructor's (the page opened with
-  ``?token=``) drives it, the students' are read-only, with a line saying so.
+  shared session (viser's per-client scene and GUI): the instructor's (its instructor cookie,
+  given for the page opened once with ``?token=``) drives it, the students' are read-only,
+  with a line saying so.
 - In ``private`` mode each browser gets its own view (viser's per-client scene and GUI) on its
   own session. A browser that brings its page's seat cookie (:func:`app.web.auth.client_seat`)
   gets the session that cookie holds, opened at its first connection and found again on a
@@ -29,6 +30,7 @@ import logging
 import math
 import threading
 import time
+import warnings
 from typing import Any
 
 import mujoco
@@ -36,12 +38,24 @@ import mujoco
 from app.live.pool import PoolFull
 from app.live.registry import AddressFull, SessionRegistry, usable_credential
 from app.live.session import SessionView
-from app.web.auth import Instructor, client_address, client_seat, client_token
+from app.web.addresses import ClientAddresses
+from app.web.auth import (
+    Instructor,
+    client_address,
+    client_headers,
+    client_instructor,
+    client_seat,
+)
 from app.web.panel import ControlPanel
 from app.web.scene import SceneView
 from models.dyros_jet import SCENE_XML
 
 log = logging.getLogger(__name__)
+# A frame drawn for a browser in the instant between its tab closing and the display hearing
+# of it is only dropped by viser; not worth a warning in the server's log per closed browser
+warnings.filterwarnings(
+    "ignore", message=r"Queued a \w+ on a closed connection", category=UserWarning
+)
 DISPLAY_HZ = 20.0  # scene updates per second at most (--display-hz)
 ALERT_S = 300.0  # [s] a worker's death is shown this long
 ADMIT_EVERY_S = 1.0  # [s] how often the display looks for room for the browsers in line
@@ -137,10 +151,12 @@ class Display:
         registry: SessionRegistry,
         hz: float = DISPLAY_HZ,
         instructor: Instructor | None = None,
+        addresses: ClientAddresses | None = None,
     ):
         self.server = server
         self.registry = registry
         self.instructor = instructor or Instructor(None)
+        self.addresses = addresses or ClientAddresses()  # the API's source too
         self.period = 1.0 / hz
         self.hz = hz
         self._lock = threading.Lock()
@@ -160,7 +176,7 @@ class Display:
     def _connect(self, client: Any) -> None:
         owner = str(client.client_id)
         registry, instructor = self.registry, self.instructor
-        drives = instructor.is_token(client_token(self.server, client))
+        drives = instructor.is_cookie(client_instructor(self.server, client))
         notice, read_only = None, False
         try:
             if registry.mode == "shared" or (drives and registry.has_shared):
@@ -170,7 +186,9 @@ class Display:
                     notice = "**Instructor**: you drive the shared demo every student watches."
             else:
                 seat = usable_credential(client_seat(self.server, client))
-                address = client_address(self.server, client)
+                address = self.addresses.resolve(
+                    client_address(self.server, client), client_headers(self.server, client)
+                )
                 try:
                     if self._in_line() and (seat is None or registry.owned([seat]) is None):
                         raise PoolFull("browsers wait in line for room")  # first come first
@@ -188,7 +206,8 @@ class Display:
                     session = registry.shared
             view = View(client, session, registry, notice, read_only=read_only)
         except Exception:  # noqa: BLE001 - a browser that left while its view was built
-            log.exception("could not build the view of a browser")
+            if not self._gone(client.client_id, built=False):
+                log.exception("could not build the view of a browser")
             self._forget(client)
             return
         self._add(client, view)
@@ -269,7 +288,8 @@ class Display:
                 client.scene.reset()
                 view = View(client, session, self.registry, OWN)
             except Exception:  # noqa: BLE001 - a browser that left while its view was built
-                log.exception("could not build the view of a browser")
+                if not self._gone(client.client_id, built=False):
+                    log.exception("could not build the view of a browser")
                 self._forget(client)
                 continue
             self._add(client, view)
@@ -277,6 +297,11 @@ class Display:
     def _add(self, client: Any, view: View | NoticeOnly) -> None:
         with self._lock:
             self.views[client.client_id] = view
+        # a browser that closed while its view was built: its disconnect may have run before
+        # this (viser unlists a client before it calls back), so the view would be drawn to a
+        # closed connection for ever, its session gone
+        if self._gone(client.client_id, built=False):
+            self._forget(client)
 
     def _forget(self, client: Any) -> None:
         with self._lock:
@@ -301,20 +326,50 @@ class Display:
     def _run(self) -> None:
         while not self._stop.is_set():
             t0 = time.perf_counter()
-            with self._lock:
-                views = list(self.views.values())
             if self.waiting:
                 try:
                     self._admit_waiting(t0)
                 except Exception:  # noqa: BLE001 - must not kill the display either
                     log.exception("admitting a browser in line failed")
-            for view in views:
-                try:
-                    view.draw(t0)
-                except Exception:  # noqa: BLE001 - a drawing bug must not kill the display
-                    log.exception("display update failed")
-                    time.sleep(0.5)
+            # the views after the admissions: a browser admitted had its old view replaced and
+            # its scene reset (drawing the old one wrote to removed nodes)
+            with self._lock:
+                views = list(self.views.items())
+            self._draw_all(views, t0)
             self._stop.wait(max(0.0, self.period - (time.perf_counter() - t0)))
+
+    def _draw_all(self, views: list[tuple[Any, View | NoticeOnly]], now: float) -> None:
+        """Draw each view. A browser that closed while its view was drawn (viser has removed
+        its scene and panel: "Cannot assign to 'position' on a removed FrameHandle") is not a
+        fault: its view is dropped without a traceback; any other failure is logged."""
+        for key, view in views:
+            with self._lock:
+                if self.views.get(key) is not view:  # replaced or forgotten meanwhile
+                    continue
+            try:
+                view.draw(now)
+            except Exception:  # noqa: BLE001 - a drawing bug must not kill the display
+                if self._gone(key):
+                    log.debug("a browser left while its view was drawn")
+                    with self._lock:
+                        self.views.pop(key, None)
+                    continue
+                log.exception("display update failed")
+                time.sleep(0.5)
+
+    def _gone(self, key: Any, built: bool = True) -> bool:
+        """Whether the browser of view ``key`` has disconnected (None: the server's own view,
+        never). ``built``: its view was added (a view forgotten meanwhile has left too)."""
+        if key is None:
+            return False
+        if built:
+            with self._lock:
+                if key not in self.views:
+                    return True
+        try:
+            return key not in self.server.get_clients()
+        except Exception:  # noqa: BLE001 - a server stopping: say gone, not an error
+            return True
 
     def health(self) -> dict[str, Any]:
         with self._lock:

@@ -275,6 +275,8 @@ def robot_frame(
     model, data = world.model, world.data
     plan = session.plan
     step_index = out.step_index if out is not None else -1
+    if error is not None and session.error_step is not None:
+        step_index = session.error_step  # the s.step it stopped in, not the tick before's
     return RobotFrame(
         method=method,
         slot=slot,

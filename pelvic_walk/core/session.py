@@ -143,6 +143,7 @@ class Session:
         # stopped at error_time; only this robot stops
         self.error: str | None = None
         self.error_time: float | None = None
+        self.error_step: int | None = None  # the s.step it failed at (steps before it landed)
         # [ms] the strategy's waist_rate call at the last STRATEGY_TICKS ticks (a ring), for
         # the live label: a strategy slower than the tick cannot run in real time. Their
         # median, not a peak: on a busy machine any call may be preempted now and then
@@ -202,7 +203,7 @@ class Session:
         try:
             out = w.tick(q_meas)
         except StrategyError as exc:  # the strategy's fault: this robot stops here
-            self.error, self.error_time = str(exc), w.t
+            self.error, self.error_time, self.error_step = str(exc), w.t, exc.step
             raise
         t1 = clock()
         self._strategy_ms[self._ticks % STRATEGY_TICKS] = out.strategy_s * 1e3

@@ -154,6 +154,9 @@ def summarize(session: Session) -> dict[str, Any]:
     n_walk = plan.n_walking_steps
     landed = [session.landings[j] for j in sorted(session.landings)]
     steps_completed = sum(1 for j in session.landings if j < n_walk)
+    if session.error_step is not None:  # stopped in step k (s.step): steps 0..k-1 touched down
+        # (a landing is measured half a DSP after it; a stop before that still landed it)
+        steps_completed = max(steps_completed, min(session.error_step, n_walk))
     step_index = s.column("step_index")
     walking = (step_index >= 0) & (step_index < plan.n)
     if session.fell:  # peaks up to the fall, not the impact after it
@@ -216,6 +219,7 @@ def summarize(session: Session) -> dict[str, Any]:
         # the pelvis strategy's fault ("ZeroDivisionError: ... (my_pelvis.py:14)") and when
         "strategy_error": session.error,
         "strategy_error_time": session.error_time,
+        "strategy_error_step": session.error_step,  # the s.step it stopped in (from 0)
         # [ms] its waist_rate calls: a strategy slower than the 5 ms tick cannot run live
         "strategy_ms_median": float(np.median(strategy_ms)) if len(strategy_ms) else 0.0,
         "strategy_ms_max": float(np.max(strategy_ms)) if len(strategy_ms) else 0.0,

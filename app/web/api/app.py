@@ -11,8 +11,9 @@ from fastapi.exceptions import RequestValidationError
 
 from app.live.registry import SessionRegistry
 from app.live.session import SessionView
+from app.web.addresses import ClientAddresses
 from app.web.api.edges import finite, router, validation_handler
-from app.web.api.headless import RunManager, runs_router
+from app.web.api.headless import RunManager, run_client, runs_router
 from app.web.api.live import session_router
 from app.web.api.pages import mount_docs_assets, pages_router
 from app.web.api.recording import recording_router
@@ -30,6 +31,7 @@ def create_app(
     report_dir: Path | None = None,
     health_extra: Callable[[], dict[str, Any]] | None = None,
     instructor: Instructor | None = None,
+    addresses: ClientAddresses | None = None,
 ) -> FastAPI:
     """The app around the server's sessions (started and stopped by the caller).
 
@@ -43,8 +45,11 @@ def create_app(
             (:func:`pelvic_walk.core.report_dir.choose_report`).
         health_extra: more fields for ``GET /api/health`` (e.g. the display's state).
         instructor: with a token, only its bearer changes the shared session.
+        addresses: how a request's client address is read (behind a trusted proxy, its
+            X-Forwarded-For); the display reads the scene's connections with the same.
     """
     instructor = instructor or Instructor(None)
+    addresses = addresses or ClientAddresses()
     registry = live if isinstance(live, SessionRegistry) else SessionRegistry.around(live)
     runs = runs or RunManager()
     app = FastAPI(
@@ -66,7 +71,7 @@ def create_app(
     app.add_exception_handler(RequestValidationError, validation_handler)  # type: ignore[arg-type]
 
     health = router("/api", "health")
-    caller = caller_of(instructor)
+    caller = caller_of(instructor, addresses)
     Who = Depends(caller)
 
     @health.get("/health")
@@ -122,7 +127,7 @@ def create_app(
         ),
         recording_router("/api", by_header),
         recording_router("/api/sessions/{sid}", by_path),
-        runs_router(runs),
+        runs_router(runs, run_client(registry), caller),
         strategies_router(),
         pages_router(app, viser_port, reports, instructor, private=registry.mode == "private"),
     ):

@@ -18,7 +18,7 @@ import math
 from collections.abc import Callable
 from typing import Any
 
-from fastapi import APIRouter, Depends, HTTPException, Query
+from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.security import HTTPAuthorizationCredentials
 
 from app.live.registry import SHARED
@@ -37,7 +37,7 @@ from app.web.api.models import (
     params_dict,
     updates,
 )
-from app.web.auth import BEARER, Instructor
+from app.web.auth import BEARER, INSTRUCTOR_COOKIE, Instructor
 from controller import strategy
 from pelvic_walk.core.frames import LiveFrame
 
@@ -174,9 +174,14 @@ def instructor_check(
     def writable(
         s: tuple[str, SessionView] = session,
         credentials: HTTPAuthorizationCredentials | None = bearer,
+        # (FastAPI always gives it; None only when called directly, as a test does)
+        request: Request = None,  # type: ignore[assignment]
     ) -> tuple[str, SessionView]:
         if not instructor.enabled or s[0] != SHARED:
             return s
+        cookie = request.cookies.get(INSTRUCTOR_COOKIE) if request is not None else None
+        if credentials is None and instructor.is_cookie(cookie):
+            return s  # the instructor's browser (its page gave the token once)
         if credentials is None:
             raise HTTPException(
                 401,

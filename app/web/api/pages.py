@@ -4,9 +4,11 @@ The page, the reference report and the docs' scripts are read from installed pac
 (``app.static``, ``app.reference_report``, ``fastapi_offline``), never from the checkout, so
 a wheel installed anywhere serves them, and ``/docs`` needs no internet.
 
-With an instructor, ``/?token=T`` (the right token) frames the scene with the token in its
-websocket address, so the display knows that browser drives the shared demo
-(:mod:`app.web.auth`); every other browser reads that the instructor drives it.
+With an instructor, ``/?token=T`` (the right token) is exchanged once for the instructor
+cookie (HttpOnly) and answered with a redirect to ``/``: the token is in no frame's address, no
+page and no later request; the cookie goes with the scene's websocket, so the display knows
+that browser drives the shared demo (:mod:`app.web.auth`); every other browser reads that the
+instructor drives it. A wrong token is redirected too (to ``/?token_wrong=1``, which says so).
 
 With private sessions, ``/`` gives the browser its seat cookie (HttpOnly, once): the scene's
 websocket carries it to the display, which opens (or finds again) the browser's own session,
@@ -18,17 +20,17 @@ from __future__ import annotations
 import html
 import os
 from collections.abc import Callable
-from urllib.parse import quote
+from urllib.parse import urlencode
 
 from fastapi import APIRouter, FastAPI, Request
 from fastapi.openapi.docs import get_redoc_html, get_swagger_ui_html
-from fastapi.responses import FileResponse, HTMLResponse
+from fastapi.responses import FileResponse, HTMLResponse, RedirectResponse, Response
 from fastapi.staticfiles import StaticFiles
 
 from app.live.registry import usable_credential
 from app.live.session import FALL_HOLD_S
 from app.web.api.edges import file_under, router
-from app.web.auth import SEAT_COOKIE, TOKEN_PARAM, Instructor, new_credential
+from app.web.auth import INSTRUCTOR_COOKIE, SEAT_COOKIE, TOKEN_PARAM, Instructor, new_credential
 from app.web.overlays import MEASURED, PREDICTED, REFERENCE
 from app.web.report_page import render_report_page
 from controller import strategy
@@ -36,6 +38,7 @@ from pelvic_walk.core.methods import METHOD_INFO
 from pelvic_walk.core.report_dir import ReportChoice, package_dir
 
 DOCS_ASSETS = "/docs-assets"  # swagger-ui / redoc files of the fastapi-offline package
+WRONG_PARAM = "token_wrong"  # /?token_wrong=1: the page says the token given was wrong
 
 
 COLOURS = {  # {{COLOR_<name>}} in the page: the scene's colours, from their one definition
@@ -100,23 +103,21 @@ def pages_router(
     r = router()
 
     @r.get("/", response_class=HTMLResponse, include_in_schema=False)
-    def index(request: Request) -> HTMLResponse:  # noqa: C901 - one branch per role
+    def index(request: Request) -> Response:  # noqa: C901 - one branch per role
+        if TOKEN_PARAM in request.query_params:
+            return exchange(request)
         host = request.url.hostname or "127.0.0.1"
         if ":" in host:  # IPv6 literal
             host = f"[{host}]"
         viser_url = f"http://{host}:{viser_port}/"
-        scene_url, role = viser_url, ""
+        scene_url, role = viser_url, ""  # the frame's address never carries a credential
         if instructor.enabled:
-            token = request.query_params.get(TOKEN_PARAM)
-            if instructor.is_token(token):
-                assert token is not None
-                # viser's client takes its websocket address from this parameter: the display
-                # reads the token back when the browser connects
-                ws = f"ws://{host}:{viser_port}/?{TOKEN_PARAM}={quote(token, safe='')}"
-                scene_url = f"{viser_url}?websocket={quote(ws, safe='')}"
+            if instructor.is_cookie(request.cookies.get(INSTRUCTOR_COOKIE)):
                 role = "instructor"
+            elif request.query_params.get(WRONG_PARAM):
+                role = "wrong"
             else:
-                role = "wrong" if token else ("student_private" if private else "student")
+                role = "student_private" if private else "student"
         page = (static_dir / "index.html").read_text(encoding="utf-8")
         page = page.replace("{{SCENE_URL}}", html.escape(scene_url, quote=True))
         # the link to open the scene alone never carries the token (a projected page's links
@@ -153,6 +154,32 @@ def pages_router(
             # sent to this host only, the scene's port included (cookies know no ports)
             response.set_cookie(
                 SEAT_COOKIE, new_credential(), httponly=True, samesite="strict", path="/"
+            )
+        return response
+
+    def exchange(request: Request) -> Response:
+        """``/?token=T``: the right token for the instructor cookie, then ``/`` (303); a wrong
+        one (or any, without an instructor) to ``/`` with a line saying so. The token leaves
+        the address bar and the history at once, and is never answered back."""
+        token = request.query_params.get(TOKEN_PARAM)
+        keep = [(k, v) for k, v in request.query_params.multi_items() if k != TOKEN_PARAM]
+        right = instructor.is_token(token)
+        if not right and instructor.enabled:
+            keep.append((WRONG_PARAM, "1"))
+        response = RedirectResponse(
+            "/" + (f"?{urlencode(keep)}" if keep else ""),
+            status_code=303,
+            headers={"Cache-Control": "no-store", "Referrer-Policy": "no-referrer"},
+        )
+        if right:
+            # HttpOnly: no script reads it; SameSite=Strict: no other site's page sends it;
+            # no Max-Age: it ends with the browser's session
+            response.set_cookie(
+                INSTRUCTOR_COOKIE,
+                instructor.issue_cookie(),
+                httponly=True,
+                samesite="strict",
+                path="/",
             )
         return response
 

@@ -31,8 +31,9 @@ from app.live.registry import (
     SessionsDisabled,
 )
 from app.live.session import SessionView
+from app.web.addresses import ClientAddresses
 from app.web.api.edges import conflict, finite, router
-from app.web.auth import BEARER, SEAT_COOKIE, Instructor, new_credential
+from app.web.auth import BEARER, INSTRUCTOR_COOKIE, SEAT_COOKIE, Instructor, new_credential
 
 HEADER = "X-Pelvic-Session"
 MINE = "mine"  # names the caller's own private session
@@ -50,18 +51,21 @@ class Caller:
     address: str | None
 
 
-def caller_of(instructor: Instructor):
-    """A FastAPI dependency: the :class:`Caller` of a request."""
+def caller_of(instructor: Instructor, addresses: ClientAddresses | None = None):
+    """A FastAPI dependency: the :class:`Caller` of a request (its address read by
+    ``addresses``, the one source the scene's connections are read by too)."""
+    source = addresses or ClientAddresses()
 
     def caller(
         request: Request, credentials: HTTPAuthorizationCredentials | None = Bearer
     ) -> Caller:
         bearer = credentials.credentials if credentials is not None else None
         seat = request.cookies.get(SEAT_COOKIE)
+        teacher = request.cookies.get(INSTRUCTOR_COOKIE)
         return Caller(
-            instructor=instructor.is_token(bearer),
+            instructor=instructor.is_token(bearer) or instructor.is_cookie(teacher),
             credentials=tuple(c for c in (bearer, seat) if c),
-            address=request.client.host if request.client is not None else None,
+            address=source.of_request(request),
         )
 
     return caller
