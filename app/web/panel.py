@@ -418,7 +418,7 @@ class ControlPanel:
                 self._update_timeline(playback)
             self.plots.update(frame, now)
             self.inspector.update(frame, now)
-            self.qp_view.update(frame, now)
+            self.qp_view.update(frame, now, playback.paused)
             self.learn.update(frame, now)
 
     def _put(self, key: Any, handle: Any, value: Any) -> None:

@@ -95,12 +95,18 @@ class QpView:
         self._key: tuple | None = None
         self._time = -math.inf
 
-    def update(self, frame: LiveFrame, now: float) -> None:
+    def update(self, frame: LiveFrame, now: float, paused: bool | None = None) -> None:
+        """Show ``frame``'s explanation for the chosen robot. ``paused``: the session is
+        paused (the intent's word: a kept frame shown after a seek was made while running,
+        so its own ``paused`` says nothing of now); paused, every shown frame is drawn at
+        once, running, at most :data:`QP_VIEW_HZ` a second."""
         r = frame.robot(self.robot.value)
         key = (frame.seq, self.robot.value)
         if key == self._key:
             return
-        if not frame.paused and now - self._time < 1.0 / QP_VIEW_HZ:
+        paused = frame.paused if paused is None else paused
+        same_robot = self._key is not None and key[1] == self._key[1]
+        if same_robot and not paused and now - self._time < 1.0 / QP_VIEW_HZ:
             return
         self._key, self._time = key, now
         content = qp_html(r, frame.clock)
