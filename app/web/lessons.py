@@ -129,9 +129,11 @@ LESSONS: tuple[Lesson, ...] = (
         f"{lesson_numbers.kappa_legs_at_landing('mpc', _PM):.0f} and its badge <i>clean</i>. "
         f"Our limits: fixed {_F:.2f} m, MPC {_M:.2f} m (paper: {_PF:.2f} / {_PM:.2f} m); "
         f"press the preset <i>{_EQ5:.2f} m (eq. 5)</i> and the fixed robot falls. The row "
-        "<i>what stops the IK</i> names the constraint that gives way: the fixed robot's "
-        "knee at its <b>straight limit</b> (0°) while its waist rate stays pinned at 0; the "
-        "Inspect tab's QP view shows it with its multiplier, the four layers side by side.",
+        "<i>what stops the IK</i> names the constraint that gives way, for a few ticks at each "
+        "landing (its count grows walk by walk; pause at a landing to read it now): the fixed "
+        "robot's knee at its <b>straight limit</b> (0°) while its waist rate stays pinned at "
+        "0; the Inspect tab's QP view shows it with its multiplier, the four layers side by "
+        "side.",
         ("4", "5", "45"),
         ("status", "shares", "active", "reach", "kappa_legs", "waist", "falls"),
     ),
