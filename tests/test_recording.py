@@ -14,8 +14,8 @@ from types import SimpleNamespace
 import pytest
 
 from app.cli import main
-from app.live.session import SessionView
 from app.live.history import ROW_COLUMNS
+from app.live.session import SessionView
 from app.web import recording
 from app.web.recording import check_seconds, decimate, kept_seconds
 

@@ -55,8 +55,15 @@ class WorkerHandle(Protocol):
 class Engine(Protocol):
     """A transport for the pool's workers."""
 
-    clock: Callable[[], float]  # the wall clock of the sessions' time base (monotonic) [s]
-    start_delay: float  # [s of wall time] rebuilt robots start this much later
+    @property
+    def clock(self) -> Callable[[], float]:
+        """The wall clock of the sessions' time base (monotonic) [s]."""
+        ...
+
+    @property
+    def start_delay(self) -> float:
+        """[s of wall time] rebuilt robots start this much later."""
+        ...
 
     def start(
         self, index: int, publish_hz: float, strategies: tuple[str, ...]

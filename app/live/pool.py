@@ -2,14 +2,14 @@
 
 The web process keeps the viser broadcast, FastAPI and the display thread; the robots run in
 ``n_workers`` workers (``app.live.worker``), by default processes, so they keep real time
-whatever the number of viewers, as long as their worker has the compute. How a worker is
-started and reached is the pool's *engine* (``app.live.engines``): processes over pipes (the
-product's), or threads of this process over queues (``serve --workers 0``, the tests); the
-placement, the parts, the merge and the restarts below are the same on both. Each robot of a session runs in
-a *part* (a :class:`~app.live.loop.LiveLoop` with that one robot) placed on the worker with
-the most free robot slots (``robots_per_worker`` each), so one session's robots use every
-core. The parts share the session's time base (the intent's anchor) and rebuild together, so
-the robots stay in step; :class:`RemoteSession` merges their frames into one.
+whatever the number of viewers, as long as their worker has the compute. How a worker is started
+and reached is the pool's *engine* (``app.live.engines``): processes over pipes (the product's),
+or threads of this process over queues (``serve --workers 0``, the tests); the placement, the
+parts, the merge and the restarts below are the same on both. Each robot of a session runs in a
+*part* (a :class:`~app.live.loop.LiveLoop` with that one robot) placed on the worker with the
+most free robot slots (``robots_per_worker`` each), so one session's robots use every core. The
+parts share the session's time base (the intent's anchor) and rebuild together, so the robots
+stay in step; :class:`RemoteSession` merges their frames into one.
 
 :meth:`WorkerPool.open` raises :class:`PoolFull` when the robots would not fit (admission
 control). A receiver thread per worker reads the frames; when a worker dies (its pipe

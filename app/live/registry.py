@@ -40,8 +40,8 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
-from app.live.intent import Intent
 from app.live.engines import InProcessEngine
+from app.live.intent import Intent
 from app.live.pool import PoolFull, RemoteSession, WorkerPool
 from app.live.session import SessionView
 

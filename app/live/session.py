@@ -42,7 +42,7 @@ from app.live.intent import (
     check_push,
     check_speed,
 )
-from app.live.loop import PUBLISH_HZ, LiveLoop, live_params
+from app.live.loop import live_params
 from controller.params import ControllerParams
 from pelvic_walk.core.frames import LiveFrame
 

@@ -1,13 +1,15 @@
-"""A worker process: it runs live sessions and sends their frames to the web process.
+"""A worker: it runs live sessions and sends their frames to the web process.
 
-The web process (``app.live.pool``) starts workers through its engine
-(``app.live.engines``: a process started with ``spawn``, or a thread of the web process) and
-talks to each over two pipes (or queues standing in for them): commands in (open a part of a session with its first intent, a new intent, close,
-stop) and frames out. Each part runs its :class:`~app.live.loop.LiveLoop` in a thread of the
-worker, paced to the session's time base; the worker holds no display or web object.
+The web process (``app.live.pool``) starts workers through its engine (``app.live.engines``: a
+process started with ``spawn``, or a thread of the web process) and talks to each over two pipes
+(or queues standing in for them): commands in (open a part of a session with its first intent, a
+new intent, close, stop) and frames out. Each part runs its :class:`~app.live.loop.LiveLoop` in
+a thread of the worker, paced to the session's time base; the worker holds no display or web
+object.
 
 Frames cross as one pickled message each (a few kB: plain arrays), sent by a thread of their
-own (:class:`Outbox`) so that a busy web process never slows the simulation. A robot's
+own (:class:`Outbox`) so that a busy web process never slows the simulation (in a thread of
+the web process they go straight into the queue, which never blocks). A robot's
 footstep plan changes only on a replan or a restart, so it is sent once and then referred to
 by :class:`FrameCodec` (the receiver fills it back in).
 """
