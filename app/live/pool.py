@@ -159,7 +159,8 @@ class RemoteSession(SessionView):
             for m, rows in frame.rows.items():
                 self._rows.setdefault(m, []).append(rows)
             self._restarted |= frame.restarted
-            order = [m for m in self.intent.methods if m in self._recent and m in self.parts]
+            methods = self.intent.methods
+            order = [m for m in methods if m in self._recent and m in self.parts]
             if not order or (method != order[0] and not frame.paused):
                 return  # merge on the lead part's frames (and every frame while paused)
             latest = [self._recent[m][-1] for m in order]
@@ -181,7 +182,11 @@ class RemoteSession(SessionView):
                 paused=paused,
                 realtime_factor=None if None in rtf else min(rtf),  # type: ignore[type-var]
                 compute_realtime_factor=None if None in crtf else min(crtf),  # type: ignore
-                intent_version=min(p.intent_version for p in parts),  # what is shown
+                # what is shown; none yet while a robot asked for has sent no frame (a
+                # change of robots is carried out once every new robot is shown)
+                intent_version=(
+                    min(p.intent_version for p in parts) if len(order) == len(methods) else -1
+                ),
                 steps_done=min(p.steps_done for p in parts),
                 pushes_done=min(p.pushes_done for p in parts),
                 robots=tuple(
