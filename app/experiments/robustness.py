@@ -244,8 +244,9 @@ def _push_words(p: PushCell | None) -> str:
 
 
 def push_order(a: PushCell | None, b: PushCell | None) -> int | None:
-    """-1 when ``a`` survives a push ``b`` topples at (their brackets do not overlap), +1 the
-    reverse, 0 when the brackets overlap; None when either is missing."""
+    """-1 when ``a`` survives a push ``b`` topples at with a gap between the brackets (the
+    difference is more than the bisection's resolution: adjacent brackets, e.g. 92-94 against
+    94-96 N, are within it and tie), +1 the reverse, 0 a tie; None when either is missing."""
     if a is None or b is None:
         return None
 
@@ -255,11 +256,19 @@ def push_order(a: PushCell | None, b: PushCell | None) -> int | None:
         return lo, hi
 
     (a_lo, a_hi), (b_lo, b_hi) = bracket(a), bracket(b)
-    if a_lo >= b_hi:
+    if a_lo > b_hi:
         return -1
-    if b_lo >= a_hi:
+    if b_lo > a_hi:
         return 1
     return 0
+
+
+def sign_p(wins: int, losses: int) -> float:
+    """Two-sided sign test that ``wins`` and ``losses`` (ties left out) are equally likely."""
+    from scipy import stats
+
+    n = wins + losses
+    return 1.0 if n == 0 else float(stats.binomtest(wins, n, 0.5).pvalue)
 
 
 def stability(rob: RobustnessSection, a: str, b: str) -> list[Comparison]:

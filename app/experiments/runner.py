@@ -25,9 +25,10 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
-from app.experiments import sensitivity
+from app.experiments import limits, sensitivity
 from app.experiments.analysis import analyse
 from app.experiments.definitions import FULL, QUICK, Requests, Study, planned_runs, refinement_runs
+from app.experiments.reach import reach_cases, reach_job
 from app.experiments.results import Meta, StudyResults, to_json
 from app.experiments.robustness import (
     PushCell,
@@ -37,7 +38,7 @@ from app.experiments.robustness import (
     trade_cells,
     trade_jobs,
 )
-from app.experiments.runs import Results
+from app.experiments.runs import Results, case_key
 from app.experiments.worker import execute
 from app.run_spec import Override, RunSpec
 from app.sweep.engine import Backend, OneJob, Task, make_backend, run_tasks
@@ -97,6 +98,7 @@ class StudyRuns:
     cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] = dataclasses.field(
         default_factory=dict
     )
+    reach: dict[str, dict | None] = dataclasses.field(default_factory=dict)  # reach_job's
 
 
 def run_study(study: Study, backend: Backend) -> StudyRuns:
@@ -142,7 +144,11 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
         for key, args in trade_jobs(study, trade_cells(study, sens)).items()
     }
     third = _run_jobs({s: requests[s] for s in seeded - table1}, study)
-    tasks = [*cell_jobs.values(), *(t for _, t in third)]
+    reach_jobs = {
+        case_key(m, x): OneJob(reach_job, m, x, label=f"reach {m} {x:g}")
+        for m, x in reach_cases(study, limits.max_step(study, results))
+    }
+    tasks = [*cell_jobs.values(), *reach_jobs.values(), *(t for _, t in third)]
     n += run_tasks(tasks, backend, desc=f"experiments ({study.name}, 3/3: {backend.name})")
     results.update({s: t.result for s, t in third})
     return StudyRuns(
@@ -152,6 +158,7 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
         n_jobs=n,
         seconds=time.perf_counter() - t0,
         cell_pushes={k: push_cell(t.result) for k, t in cell_jobs.items()},
+        reach={k: t.result for k, t in reach_jobs.items()},
     )
 
 
@@ -234,7 +241,9 @@ def finish(out: Path, study: Study, runs: StudyRuns, meta: Meta, t0: float) -> i
     from app.experiments import figures
     from app.report_dir import record_report_dir
 
-    data = analyse(study, runs.results, meta, runs.sensitivity, runs.pushes, runs.cell_pushes)
+    data = analyse(
+        study, runs.results, meta, runs.sensitivity, runs.pushes, runs.cell_pushes, runs.reach
+    )
     data = dataclasses.replace(
         data, figures=figures.make_all(study, runs.results, data, out / "figures")
     )
