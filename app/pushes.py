@@ -62,6 +62,7 @@ def run_push(
     step: int = PUSH_STEP,
     n_steps: int = N_STEPS,
     params: ControllerParams | None = None,
+    phase: float = 0.5,
 ) -> PushOutcome:
     """Walk ``n_steps`` of ``step_length`` and push the torso ``force`` N toward ``direction``
     for ``duration`` s from the middle of step ``step``'s single support."""
@@ -78,7 +79,8 @@ def run_push(
     p = base.replace(method=method, walk={"step_length": step_length, "n_steps": n_steps})
     session = Session(RunConfig(params=p))
     plan = session.plan
-    t_push = 0.5 * (float(plan.liftoff_times()[step]) + float(plan.landing_times()[step]))
+    lift, land = float(plan.liftoff_times()[step]), float(plan.landing_times()[step])
+    t_push = lift + phase * (land - lift)  # phase of the single support (0.5: its middle)
     support = "right" if int(plan.swing_side[step]) == LEFT else "left"
     dx, dy = DIRECTIONS[direction]
     world = session.world
@@ -152,6 +154,7 @@ def largest_survived(
     step: int = PUSH_STEP,
     n_steps: int = N_STEPS,
     params: ControllerParams | None = None,
+    phase: float = 0.5,
 ) -> Survival:
     """Bisect the push size between 0 N and ``f_high`` until survived and failed are at most
     ``resolution`` apart.
@@ -162,7 +165,7 @@ def largest_survived(
     """
 
     def trial(f: float) -> PushOutcome:
-        return run_push(method, step_length, f, direction, duration, step, n_steps, params)
+        return run_push(method, step_length, f, direction, duration, step, n_steps, params, phase)
 
     lo, hi = 0.0, f_high
     why: str | None = None

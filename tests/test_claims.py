@@ -841,3 +841,79 @@ def test_stability_comparisons():
     assert orders == {"push left at 0.30 m": -1, "push right at 0.30 m": -1, "falls at 15 N": 0}
     rob = stability({"mpc": 90, "redundancy": 90}, {"mpc": 30, "redundancy": 5}).robustness
     assert [c.order for c in compare(rob, "mpc", "redundancy")] == [0, 0, 1]
+
+
+def test_verdict_helper_inconclusive():
+    """Inconclusive is its own outcome: after holds and partly, before does not hold, and
+    only where the rule names what cannot tell."""
+    rule = Rule((above("net", 1.0),), (above("net", 0.0),), inconclusive=(is_("resolved", False),))
+    assert verdict({"net": 2.0, "resolved": True}, rule) == HOLDS
+    assert verdict({"net": 0.5, "resolved": True}, rule) == PARTLY
+    assert verdict({"net": 0.0, "resolved": False}, rule) == INCONCLUSIVE
+    assert verdict({"net": -1.0, "resolved": True}, rule) == FAILS
+    assert "else inconclusive if not (resolved)" in rule.words({})
+    assert rule.measures() == {"net", "resolved"}
+    # a rule without inconclusive bounds never says it
+    assert verdict({"net": 0.0}, Rule((above("net", 1.0),))) == FAILS
+
+
+def test_adjacent_push_brackets_are_within_the_resolution():
+    """Brackets that touch (92-94 against 94-96 N) differ by one bisection step: a tie; a gap
+    between them counts. The sign test needs most differing conditions to agree."""
+    from app.experiments.robustness import push_order, sign_p
+
+    def push(s, f):
+        return PushCell("m", 0.3, "left", 0.1, s, f, None, 7)
+
+    assert push_order(push(92, 94), push(94, 96)) == 0
+    assert push_order(push(96, 98), push(100, 102)) == 1
+    assert sign_p(0, 0) == 1.0
+    assert sign_p(6, 0) == pytest.approx(0.03125)
+    assert sign_p(1, 2) == 1.0
+
+
+def test_yaw_rate_near_landing():
+    """A momentum that jumps at the landings has its peak rate there; elsewhere the smooth
+    part's."""
+    from app.experiments.yaw import rate_near_landing
+
+    t = np.arange(0.0, 6.0, 0.01)
+    h = np.sin(2 * np.pi * t / 2.4) + 0.5 * np.floor(t / 1.2)  # a 0.5 jump at every 1.2 s
+    at, rest = rate_near_landing(t, h, np.array([1.2, 2.4, 3.6, 4.8]))
+    assert at == pytest.approx(50.0, rel=0.1)  # 0.5 over one 10 ms sample
+    assert rest == pytest.approx(2 * np.pi / 2.4, rel=0.05)
+    assert rate_near_landing(t[:2], h[:2], np.array([1.0])) == (None, None)
+
+
+def test_reach_section_and_cases():
+    from app.experiments.reach import QUANTITIES, reach_cases, reach_section
+
+    ms = {"fixed": _max_step(0.37), "mpc": _max_step(0.43)}
+    assert reach_cases(QUICK, ms) == [("fixed", 0.37), ("mpc", 0.37), ("mpc", 0.43)]
+    assert reach_cases(QUICK, {"fixed": _max_step(None), "mpc": _max_step(0.43)}) == [("mpc", 0.43)]
+    landing = {q: 0.1 for q in QUANTITIES}
+    sec = reach_section(
+        {"fixed@0.37": dict(method="fixed", step_length=0.37, steps=7, landing=landing)}
+    )
+    assert sec is not None and sec.eq4 == pytest.approx(0.302, abs=1e-3)
+    assert sec.cases["fixed@0.37"].landing["step"] == 0.1
+    assert reach_section({"x": None}) is None
+
+
+def test_deviations_read_the_paper_values_cell():
+    from app.experiments.deviations import DEVIATIONS, paper_value_words
+
+    beta = next(d for d in DEVIATIONS if d.what.startswith("beta_pel"))
+    assert paper_value_words(beta, None) == "not run"
+
+    class S:  # the part of SensitivitySection the words read
+        def all_cells(self):
+            return [(beta.cell, [["pelvis.beta", 1e-10]])]
+
+        def limit(self, m, ov):
+            return {("mpc", True): 0.41, ("fixed", True): 0.37}.get((m, bool(ov)), 0.40)
+
+    text = paper_value_words(beta, S())
+    assert text.startswith("longest clean step: MPC 0.41 m, fixed 0.37 m (gain +0.04 m)")
+    assert "at our defaults 0.40 / 0.40 m" in text
+    assert all(d.why for d in DEVIATIONS)

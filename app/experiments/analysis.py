@@ -33,6 +33,7 @@ def analyse(
     pushes: dict[str, PushCell | None] | None = None,
     cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] | None = None,
     reach_outcomes: dict[str, dict | None] | None = None,
+    grid_pushes: dict[str, PushCell | None] | None = None,
 ) -> StudyResults:
     """Every section's numbers, the claims' verdicts, and every run's summary."""
     ms = limits.max_step(study, results)
@@ -48,7 +49,7 @@ def analyse(
         zmp=balance.zmp(study, results),
         lateral=waist.lateral(study, results, lateral_limits(sens)),
         balance=balance.balance(study, results),
-        robustness=robustness.robustness(study, results, pushes, sens, cell_pushes),
+        robustness=robustness.robustness(study, results, pushes, sens, cell_pushes, grid_pushes),
         sensitivity=sens,
         ablation=ablation.ablation(study, results, pushes),
         reach=reach.reach_section(reach_outcomes or {}),

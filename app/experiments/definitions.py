@@ -108,6 +108,10 @@ class Pushes:
     resolution: float = 2.0  # [N] largest bracket (survived .. toppled)
     f_high: float = 256.0  # [N] top of the bisection (a power of two times the resolution)
     trade_length: float = 0.30  # [m] where the sensitivity cells' push margin is measured
+    # the stability claim's pushes beyond mid single support of the third step: at
+    # ``grid_length``, each (pushed step, phase of its single support) below, both directions
+    grid_length: float = 0.30  # [m]
+    grid: tuple[tuple[int, float], ...] = ((2, 0.25), (2, 0.75), (3, 0.25), (3, 0.5), (3, 0.75))
 
 
 @dataclass(frozen=True)

@@ -19,7 +19,13 @@ from app.experiments.ablation import buys, push_n
 from app.experiments.definitions import AUTHORS, Study
 from app.experiments.energy import MIN_EFFECT_MEAN
 from app.experiments.results import ClaimResult, StudyResults
-from app.experiments.robustness import PushCell, RobustnessSection, TradeRow, stability
+from app.experiments.robustness import (
+    PushCell,
+    RobustnessSection,
+    TradeRow,
+    falls_p,
+    stability,
+)
 from app.experiments.runs import case_key, length_key
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, INCONCLUSIVE, NOT_MEASURED, PARTLY
 from app.run_spec import DISTURBANCE
@@ -133,36 +139,52 @@ def answer(study: Study, r: StudyResults) -> str | None:
 
     lims = {x: limit(x) for x in methods}
     turning = [x for x in methods if x != FIXED and lims[x] is not None]
+    gains = [cast(float, lims[x]) - f for x in turning]
+    lengthens = bool(gains) and max(gains) > res / 2
     text = (
-        "**The answer.** Turning the pelvis lengthens the longest step our robot walks without "
-        "a fault, whichever way it is turned: "
+        "**The answer.** "
+        + (
+            "Turning the pelvis lengthens the longest step our robot walks without a fault"
+            + (", whichever way it is turned" if gains and min(gains) > res / 2 else "")
+            if lengthens
+            else "Turning the pelvis does not lengthen the longest step our robot walks "
+            "without a fault"
+        )
+        + ": "
         + ", ".join(f"{label(x)} {_m(lims[x])} m" for x in methods)
         + f" (each found on a {res:g} m grid, so +/- {res:g} m; the paper: "
         + " / ".join(f"{paper.MAX_STEP[k]:.2f}" for k in (FIXED, REDUNDANCY, MPC))
         + " m for the first three)."
     )
-    if turning:
-        gains = [cast(float, lims[x]) - f for x in turning]
+    if gains:
         text += (
             f" Rotation earns {min(gains):+.2f} to {max(gains):+.2f} m "
-            f"({100 * min(gains) / f:+.0f} to {100 * max(gains) / f:+.0f} %); the paper's "
-            f"+{GAIN:.2f} m is not reproduced because our fixed pelvis already walks "
-            f"{f:.2f} m (section 2 measures why)."
+            f"({100 * min(gains) / f:+.0f} to {100 * max(gains) / f:+.0f} %)"
         )
+        if f > paper.MAX_STEP[FIXED] + 1e-9 and m - f < GAIN - 1e-9:
+            text += (
+                f"; the paper's +{GAIN:.2f} m is not reproduced because our fixed pelvis "
+                f"already walks {f:.2f} m (section 2 measures why)"
+            )
+        text += "."
         others = [x for x in turning if x != MPC]
         best_other = max((cast(float, lims[x]) for x in others), default=None)
         if best_other is not None:
             extra = m - best_other
-            grid = abs(extra) <= res + 1e-9
             text += (
-                f" The MPC's plan adds {extra:+.2f} m over the best of the simpler ways to turn "
-                + ("(within one step of the grid)" if grid else "")
+                f" The MPC's plan adds {extra:+.2f} m over the best of the simpler ways to turn"
+                + (" (within one step of the grid)" if abs(extra) <= res + 1e-9 else "")
                 + ": "
                 + ", ".join(f"{label(x)} {m - cast(float, lims[x]):+.2f} m" for x in others)
-                + ". So on this robot the rotation earns the longer step; the MPC's prediction "
-                "buys at most one grid step of it. The sine is essentially the prior art the "
-                "paper cites (its ref. [2])."
+                + "."
             )
+            if lengthens and extra <= res + 1e-9:
+                text += (
+                    " So on this robot the rotation earns the longer step; the MPC's "
+                    f"prediction buys at most one grid step ({res:g} m) of it."
+                )
+        if _row(a, "sine"):
+            text += " The sine is essentially the prior art the paper cites (its ref. [2])."
     if a is not None:
         x = length_key(a.turn_length)
         dirs = list(study.pushes.directions) if study.pushes else []
@@ -192,9 +214,28 @@ def answer(study: Study, r: StudyResults) -> str | None:
         if spread:
             text += (
                 f" The shoves differ from the straight pelvis's by at most {max(spread):.0f} N "
-                "in this one phase; section 8 reads every push and fall and cannot tell the "
-                "MPC from redundancy on them."
+                "in this one phase of the step."
             )
+    rob = r.robustness
+    heavy = _heavy_falls(rob) if rob else None
+    if heavy and MPC in heavy[1] and FIXED in heavy[1]:
+        by = heavy[1]
+        cm, cf = by[MPC], by[FIXED]
+        p = falls_p(cm, cf)
+        text += (
+            f" Under random shoves {heavy[0]} strong the MPC falls in {cm.fell} of {cm.runs} "
+            f"walks against {cf.fell} of {cf.runs} with the straight pelvis"
+            + (f" and {by[REDUNDANCY].fell} with redundancy" if REDUNDANCY in by else "")
+            + (f" (p = {p:.2g}: not a significant difference)" if p >= 0.05 else f" (p = {p:.2g})")
+            + "."
+        )
+    st = _claim(r, "stability")
+    if st and st.measured.get("reading_rows"):
+        text += (
+            f" Is the MPC's rotation 'more stable' than redundancy's (Sec. VII): {st.verdict}; "
+            + "; ".join(f"{k}: {says}" for k, says, _ in st.measured["reading_rows"])
+            + " (section 8)."
+        )
     return text
 
 
