@@ -278,14 +278,15 @@ def yaw_landing_rapid(study: Study, r: StudyResults) -> Measured:
     if not (red and mpc and red.no_arms.landing_rate_peak and mpc.no_arms.landing_rate_peak):
         return None
     a, b = red.no_arms, mpc.no_arms
+    at_a, at_b = cast(float, a.landing_rate_peak), cast(float, b.landing_rate_peak)
     nan = float("nan")
     return dict(
         length=LONG,
-        red=a.landing_rate_peak,
-        mpc=b.landing_rate_peak,
+        red=at_a,
+        mpc=at_b,
         red_rest=a.other_rate_peak if a.other_rate_peak is not None else nan,
         mpc_rest=b.other_rate_peak if b.other_rate_peak is not None else nan,
-        ratio=a.landing_rate_peak / b.landing_rate_peak,
+        ratio=at_a / at_b,
     )
 
 

@@ -203,14 +203,14 @@ def answer(study: Study, r: StudyResults) -> str | None:
             f"{a.push_resolution:g} N, one push phase): {push} N; energy per two steps at "
             f"{a.turn_length:.2f} m (1 ms, mean +/- std over one walk's windows): {energy} J."
         )
-        spread = [
-            abs(push_n(w.pushes.get(d)) - push_n(_row(a, FIXED).pushes.get(d)))
-            for w in rows
-            for d in dirs
-            if _row(a, FIXED)
-            and push_n(w.pushes.get(d)) is not None
-            and push_n(_row(a, FIXED).pushes.get(d)) is not None
-        ]
+        fixed_row = _row(a, FIXED)
+        spread = []
+        for w in rows:
+            for d in dirs:
+                pw = push_n(w.pushes.get(d))
+                pf = push_n(fixed_row.pushes.get(d)) if fixed_row else None
+                if pw is not None and pf is not None:
+                    spread.append(abs(pw - pf))
         if spread:
             text += (
                 f" The shoves differ from the straight pelvis's by at most {max(spread):.0f} N "
