@@ -252,10 +252,16 @@ def plain(study: Study, r: StudyResults) -> str | None:
         "second or so and chooses the turn that fits them), so that each leg reaches "
         "further and the robot can take longer steps. It compares this with the pelvis held "
         "straight (*fixed*) and with the authors' earlier method, which turns the pelvis only "
-        "as far as the feet need at each instant (*redundancy*). Beside them we run two "
-        "simpler ways to turn: a plain gain toward the MPC's own reference angle and a sine "
-        "timed by the step (section 10)."
+        "as far as the feet need at each instant (*redundancy*)."
     )
+    if r.ablation is not None and any(w.role != "paper" for w in r.ablation.rows):
+        text += (
+            " Beside them we run simpler ways to turn: "
+            + ", ".join(
+                f"{w.label.lower()} (`{w.method}`)" for w in r.ablation.rows if w.role != "paper"
+            )
+            + " (section 10)."
+        )
     ans = answer(study, r)
     if ans:
         text += "\n\n" + ans
