@@ -107,7 +107,9 @@ DEVIATIONS: tuple[Deviation, ...] = (
 def paper_value_words(d: Deviation, s: Any) -> str:
     """What the paper's value gives, from the sensitivity section ``s`` (its cell's clean
     limits, 6-step walks), or "not run"."""
-    if not d.cell or s is None:
+    if not d.cell:
+        return "—"
+    if s is None:
         return "not run"
     cells = dict(s.all_cells())
     if d.cell not in cells:

@@ -659,7 +659,7 @@ def stability(study: Study, r: StudyResults) -> Measured:
     favor = sum(o < 0 for o, _ in readings.values())
     against = sum(o > 0 for o, _ in readings.values())
     t = _tally(comps)
-    fixed = _tally(compare(rob, MPC, FIXED))
+    fixed = _tally([c for c in compare(rob, MPC, FIXED) if c.what.startswith("push")])
     return dict(
         **t,
         favor=favor,

@@ -271,8 +271,13 @@ def plain(study: Study, r: StudyResults) -> str | None:
     }
     text += (
         f"\n\nOf the paper's {len(r.tallied)} claims we test, {count[HOLDS]} hold, "
-        f"{count[PARTLY]} hold in part, {count[INCONCLUSIVE]} are inconclusive (our evidence "
-        f"cannot tell) and {count[FAILS]} do not hold"
+        f"{count[PARTLY]} hold in part, "
+        + (
+            f"{count[INCONCLUSIVE]} are inconclusive (our evidence cannot tell) "
+            if count[INCONCLUSIVE]
+            else "none is inconclusive "
+        )
+        + f"and {count[FAILS]} do not hold"
         + (f"; {count[DEPENDS]} depend on the reading" if count[DEPENDS] else "")
         + "."
     )
@@ -427,7 +432,8 @@ def _energy(study: Study, r: StudyResults) -> str | None:
         for c in claims
         if c.verdict == DEPENDS
     ]
-    means = [c.mean for row in r.energy.table.values() for c in row.values() if c.mean]
+    e1 = r.energy.at_substep()  # the reading the claims use
+    means = [c.mean for row in e1.table.values() for c in row.values() if c.mean]
     theirs = [c.mean for row in paper.TABLE1.values() for c in row.values() if c]
     text = (
         f"**Energy (Table 1, judged at 1 ms):** of {len(claims)} energy claims "
@@ -446,7 +452,7 @@ def _energy(study: Study, r: StudyResults) -> str | None:
     )
     if means:
         text += (
-            f"; our windows cost {min(means):.0f}-{max(means):.0f} J (the paper's "
+            f"; our windows cost {min(means):.0f}-{max(means):.0f} J at 1 ms (the paper's "
             f"{min(theirs):.0f}-{max(theirs):.0f} J)"
         )
     differ = [
