@@ -338,8 +338,11 @@ CLAIMS: tuple[Claim, ...] = (
         ours="peak |d momentum/dt| within 0.1 s of a touch-down: redundancy {red:.2f}, MPC "
         "{mpc:.2f} kg m^2/s^2 (x{ratio:.2f}); elsewhere in the step {red_rest:.2f} vs "
         "{mpc_rest:.2f}",
-        rule=Rule((above("ratio", 1.5),), (above("ratio", 1.0),)),
-        names={"ratio": "redundancy's peak |d momentum/dt| at landing / MPC's"},
+        rule=Rule((above("ratio", 1.5), is_("at_landing", True)), (above("ratio", 1.0),)),
+        names={
+            "ratio": "redundancy's peak |d momentum/dt| at landing / MPC's",
+            "at_landing": "redundancy's fastest change is at landing (not elsewhere in the step)",
+        },
         note="the same x1.5 as the waist rate's sharpness",
     ),
     Claim(

@@ -287,6 +287,8 @@ def yaw_landing_rapid(study: Study, r: StudyResults) -> Measured:
         red_rest=a.other_rate_peak if a.other_rate_peak is not None else nan,
         mpc_rest=b.other_rate_peak if b.other_rate_peak is not None else nan,
         ratio=at_a / at_b,
+        # the change is at landing: redundancy's fastest change is there, not elsewhere
+        at_landing=bool(a.other_rate_peak is None or at_a >= a.other_rate_peak),
     )
 
 
