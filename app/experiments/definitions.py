@@ -281,7 +281,7 @@ QUICK = Study(
         landings=(0.01, 0.02, 0.03),
         kappas=(300.0, 1000.0),
     ),
-    pushes=Pushes(lengths=(0.30,), resolution=64.0),
+    pushes=Pushes(lengths=(0.30,), resolution=64.0, grid=((3, 0.5),)),  # one extra condition
     falls=Falls(walks=3, steps=6),
     ablations=Ablations(),
 )
