@@ -21,10 +21,10 @@ from app.experiments.definitions import QUICK, Falls, Pushes
 from app.experiments.energy import EnergyCell, EnergySection
 from app.experiments.kappa import KappaCase, KappaSection
 from app.experiments.limits import KinematicsSection, MaxStep
+from app.experiments.outcomes import StepExtract, case_key, length_key, samples
 from app.experiments.report import escape_cell, header, render, row
 from app.experiments.results import Meta, StudyResults
 from app.experiments.robustness import FallsCell, PushCell, RobustnessSection, push_key
-from app.experiments.runs import StepExtract, case_key, length_key, samples
 from app.experiments.verdicts import (
     DEPENDS,
     FAILS,

@@ -13,6 +13,7 @@ from app.experiments.claims import evaluate
 from app.experiments.definitions import AUTHORS, QUICK, Falls, Pushes
 from app.experiments.energy import EnergyCell, EnergySection, joint_groups
 from app.experiments.kappa import KappaSection
+from app.experiments.outcomes import RunSummary, case_key, failure_reasons, length_key
 from app.experiments.report import render
 from app.experiments.results import Meta, StudyResults
 from app.experiments.robustness import (
@@ -25,7 +26,6 @@ from app.experiments.robustness import (
     trade_cells,
     trade_jobs,
 )
-from app.experiments.runs import RunSummary, case_key, failure_reasons, length_key
 from app.experiments.sensitivity import SensitivityRow, SensitivitySection, effective, reads
 from app.experiments.waist import LateralCase, LateralSection, WaistSection, sine_share
 from app.experiments.yaw import YawSection
@@ -336,7 +336,7 @@ def test_the_kappa_legs_cells_read_the_run_summary_field():
     read it (they printed "-" when it was looked up among the other keys)."""
     from app.experiments.definitions import Study
     from app.experiments.kappa import kappa_case
-    from app.experiments.runs import RunResult
+    from app.experiments.outcomes import RunResult
 
     study = Study("t", 4, 1, (0.3,), 0.05, (0.3,), 1, 4)
     s = _summary(condition_number_legs_max=76.0, kappa_legs_landing=[70.0, 72.0])

@@ -28,8 +28,8 @@ import numpy as np
 from app.experiments.definitions import Study, sweep_bracket
 from app.experiments.kappa import kappa_case
 from app.experiments.limits import figure_lengths_run
+from app.experiments.outcomes import Results, RunSummary, length_key, step_of, summary_of
 from app.experiments.robustness import PushCell, push_key
-from app.experiments.runs import Results, RunSummary, length_key, step_of, summary_of
 from app.experiments.waist import waist_case
 from controller import strategy
 from pelvic_walk.core.measure import walks

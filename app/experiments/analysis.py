@@ -18,9 +18,9 @@ from app.experiments import (
     yaw,
 )
 from app.experiments.definitions import Study
+from app.experiments.outcomes import Results
 from app.experiments.results import Meta, RunRecord, StudyResults
 from app.experiments.robustness import PushCell
-from app.experiments.runs import Results
 from app.experiments.sensitivity import SensitivitySection, lateral_limits
 from pelvic_walk.core.run_spec import Override
 

@@ -33,7 +33,7 @@ import numpy as np
 
 from app.experiments import paper
 from app.experiments.definitions import Study
-from app.experiments.runs import Results, length_key, summary_of
+from app.experiments.outcomes import Results, length_key, summary_of
 
 SIGNIFICANCE = 0.05  # two cells differ when the test's p is below this
 BOOTSTRAP = 2000  # resamples of the std test (seeded: the same p every time)

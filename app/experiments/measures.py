@@ -21,8 +21,8 @@ from typing import Any, cast
 from app.experiments import paper
 from app.experiments.definitions import ROTATING, Study
 from app.experiments.energy import EnergyCell, EnergySection, order_means, order_stds
+from app.experiments.outcomes import case_key, length_key
 from app.experiments.results import StudyResults
-from app.experiments.runs import case_key, length_key
 from app.experiments.waist import sine_share
 from controller.strategy import FIXED, MPC, REDUNDANCY
 from pelvic_walk.core.metrics import KAPPA_SINGULAR

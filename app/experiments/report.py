@@ -38,10 +38,10 @@ from app.experiments.energy import (
     std_gap_p,
 )
 from app.experiments.kappa import NEAR_BELOW
+from app.experiments.outcomes import case_key, length_key
 from app.experiments.reach import QUANTITIES
 from app.experiments.results import ClaimResult, StudyResults
 from app.experiments.robustness import PushCell, RobustnessSection, falls_p, stability
-from app.experiments.runs import case_key, length_key
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.summary import plain, summary_lines, trade_words
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, INCONCLUSIVE, NOT_MEASURED, PARTLY

@@ -2,7 +2,7 @@
 numbers from its topic module, the claims' verdicts, every run's summary, the run's
 :class:`Meta`); :func:`to_json` writes it (``dataclasses.asdict``, NaN / inf as null).
 
-A run's own results are in :mod:`app.experiments.runs`; each section's dataclasses in its
+A run's own results are in :mod:`app.experiments.outcomes`; each section's dataclasses in its
 topic module (:mod:`~app.experiments.limits`, :mod:`~app.experiments.waist`, ...).
 """
 

@@ -37,7 +37,7 @@ import numpy as np
 
 from app.experiments.definitions import Falls, Pushes, Study
 from app.experiments.energy import SIGNIFICANCE
-from app.experiments.runs import Results, case_key, summary_of
+from app.experiments.outcomes import Results, case_key, summary_of
 from app.experiments.sensitivity import SensitivitySection, reads
 from controller.strategy import FIXED, MPC
 from pelvic_walk.core.metrics import LANDING_ERROR_CLEAN

@@ -29,6 +29,7 @@ from pathlib import Path
 from app.experiments import limits, sensitivity
 from app.experiments.analysis import analyse
 from app.experiments.definitions import FULL, QUICK, Requests, Study, planned_runs, refinement_runs
+from app.experiments.outcomes import Results, case_key
 from app.experiments.reach import reach_cases, reach_job
 from app.experiments.results import Meta, StudyResults, to_json
 from app.experiments.robustness import (
@@ -40,7 +41,6 @@ from app.experiments.robustness import (
     trade_cells,
     trade_jobs,
 )
-from app.experiments.runs import Results, case_key
 from app.experiments.worker import execute
 from controller import strategy
 from pelvic_walk.core.engine import Backend, OneJob, Task, make_backend, run_tasks

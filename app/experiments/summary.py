@@ -18,6 +18,7 @@ from app.experiments import paper
 from app.experiments.ablation import buys, push_n
 from app.experiments.definitions import AUTHORS, Study
 from app.experiments.energy import MIN_EFFECT_MEAN
+from app.experiments.outcomes import case_key, length_key
 from app.experiments.results import ClaimResult, StudyResults
 from app.experiments.robustness import (
     PushCell,
@@ -26,7 +27,6 @@ from app.experiments.robustness import (
     falls_p,
     stability,
 )
-from app.experiments.runs import case_key, length_key
 from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, INCONCLUSIVE, NOT_MEASURED, PARTLY
 from controller import strategy
 from controller.strategy import FIXED, MPC, REDUNDANCY

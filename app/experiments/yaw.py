@@ -11,7 +11,7 @@ import numpy as np
 
 from app.experiments import paper
 from app.experiments.definitions import Study
-from app.experiments.runs import Results, array, case_key, failure_reasons, summary_of, walk_of
+from app.experiments.outcomes import Results, array, case_key, failure_reasons, summary_of, walk_of
 
 
 @dataclass(frozen=True)
