@@ -77,27 +77,39 @@ def _own_state_dir(tmp_path_factory):
         yield
 
 
-# -- the API around a live simulation (one per test module) ---------------------------------
-# A module tunes them with module-level dicts: LIVE_SIM (LiveSim's keyword arguments, e.g.
-# ``{"methods": ["mpc"], "speed": 4.0}``; the plans are short, N_STEPS steps) and APP_OPTIONS
-# (create_app's, e.g. ``{"runs": RunManager(max_wall_s=2.0)}``).
+# -- the API around a live session (one per test module) --------------------------------------
+# A module tunes them with module-level dicts: LIVE_SESSION (initial_intent's keyword
+# arguments, e.g. ``{"methods": ["mpc"], "speed": 4.0}``; the plans are short, N_STEPS steps)
+# and APP_OPTIONS (create_app's, e.g. ``{"runs": RunManager(max_wall_s=2.0)}``).
 N_STEPS = 4  # steps of a live plan in these tests: short, so plan ends and restarts are seen
 
 
 @pytest.fixture(scope="module")
-def live(request):
-    """A running :class:`~app.live.LiveSim` (two robots, fixed and mpc, by default) that has
-    published a frame; stopped at the end, and it must not have failed."""
-    from app.live import LiveSim
+def live_pool():
+    """The worker pool of a test module, on its in-process engine (the workers are threads of
+    this process: nothing to spawn, and the tests may read the robots); room for six robots."""
+    from app.live.engines import InProcessEngine
+    from app.live.pool import WorkerPool
+
+    pool = WorkerPool(1, robots_per_worker=6, engine=InProcessEngine()).start()
+    yield pool
+    pool.stop()
+
+
+@pytest.fixture(scope="module")
+def live(live_pool, request):
+    """A running session of :func:`live_pool` (two robots, fixed and mpc, by default) that has
+    published a frame; closed at the end, and it must not have failed."""
+    from app.live.session import initial_intent
     from controller.params import ControllerParams
 
-    kw = {"methods": ["fixed", "mpc"], **getattr(request.module, "LIVE_SIM", {})}
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": N_STEPS}), **kw)
-    sim.start()
-    assert sim.wait_frame(timeout=60) is not None, "the live simulation published nothing"
-    yield sim
-    sim.stop()
-    assert sim.error is None, sim.error
+    kw = {"methods": ["fixed", "mpc"], **getattr(request.module, "LIVE_SESSION", {})}
+    params = ControllerParams().replace(walk={"n_steps": N_STEPS})
+    session = live_pool.open(initial_intent(params, **kw), sid="shared")
+    assert session.wait_frame(timeout=60) is not None, "the live session published nothing"
+    yield session
+    live_pool.close(session)
+    assert session.error is None, session.error
 
 
 @pytest.fixture(scope="module")

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from app.live import LiveSim
+from app.live.session import SessionView
 from app.web.addresses import ClientAddresses
 from app.web.api import create_app
 from controller.params import ControllerParams
@@ -34,14 +34,14 @@ def _state(client) -> dict:
     return r.json()
 
 
-def _wait_newer(live: LiveSim, n: int = 3) -> None:
+def _wait_newer(live: SessionView, n: int = 3) -> None:
     f = live.frame()
     for _ in range(n):
         f = live.wait_frame(f.seq, timeout=60)
         assert f is not None
 
 
-def _applied(live: LiveSim, answer: dict | None = None) -> dict | None:
+def _applied(live: SessionView, answer: dict | None = None) -> dict | None:
     """Return once the loop has carried out every request made so far. A playback route's
     answer says whether it had within its wait (``"applied"``); on a machine too busy for
     that it answers ``false``, which is no error: then the test waits here."""
@@ -257,26 +257,28 @@ def test_serve_refuses_workers_that_cannot_hold_the_demo(capsys):
     assert len(err) == 1 and "cannot hold the 3 robots" in err[0] and "--workers" in err[0]
 
 
-def test_worker_layout_fills_the_measured_capacity_a_session_per_worker(monkeypatch):
-    """ROBOTS_PER_CORE robots a core; by default a session's robots per worker (they share one
-    core, the GIL) and as many workers as that fills; given one option, the other follows."""
+def test_worker_layout_fills_the_measured_capacity_a_worker_per_core(monkeypatch):
+    """ROBOTS_PER_CORE robots a core; by default one worker a core (a worker's robots share one
+    core, the GIL), the capacity shared out over them; given one option, the other follows;
+    the demo's robots always fit."""
     from app.web import settings
 
     monkeypatch.setattr(settings, "ROBOTS_PER_CORE", 4.5)
     monkeypatch.setattr(settings.os, "cpu_count", lambda: 2)
-    assert settings.worker_layout(None, None) == (3, 3)  # 9 robots: the demo + 2 sessions
+    assert settings.worker_layout(None, None) == (2, 5)  # 9 robots: 2 workers, 5 each at most
     assert settings.worker_layout(1, None) == (1, 9)
+    assert settings.worker_layout(0, None) == (0, 9)  # in the web process: the capacity
     assert settings.worker_layout(4, None) == (4, 3)  # 9 robots over 4 workers: 3 each at most
     assert settings.worker_layout(None, 2) == (4, 2)
     assert settings.worker_layout(None, 20) == (1, 20)  # more than the capacity: one worker
     assert settings.worker_layout(5, 3) == (5, 3)  # both given: as given
     monkeypatch.setattr(settings.os, "cpu_count", lambda: None)  # unknown: one core
-    assert settings.worker_layout(None, None) == (1, 3)  # the demo's three robots fit
+    assert settings.worker_layout(None, None) == (1, 4)  # the demo's three robots fit
     monkeypatch.setattr(settings.os, "cpu_count", lambda: 32)  # a big machine: capped workers
-    assert settings.worker_layout(None, None) == (settings.MAX_DEFAULT_WORKERS, 3)
-    monkeypatch.setattr(settings, "ROBOTS_PER_CORE", 2)  # the rule, not the figure
+    assert settings.worker_layout(None, None) == (settings.MAX_DEFAULT_WORKERS, 9)
+    monkeypatch.setattr(settings, "ROBOTS_PER_CORE", 1)  # the rule, not the figure
     monkeypatch.setattr(settings.os, "cpu_count", lambda: 2)
-    assert settings.worker_layout(None, None) == (1, 3)
+    assert settings.worker_layout(None, None) == (2, 2)  # 2 slots would not hold the demo
 
 
 def test_pages(client):
@@ -496,7 +498,8 @@ def test_with_an_instructor_only_the_token_changes_the_shared_session(
     kw = {"json": body} if body is not None else {}
     # every change of the session's intent, by the thread that made it: the session changes
     # it by itself too (a restart when a plan ends, the time base moving after a late loop),
-    # on its loop's thread; a request that reached it would change it on the server's
+    # on the pool's threads that receive its frames; a request that reached it would change
+    # it on the server's
     writers: list[str] = []
     box, modify = live._box, live._box.modify  # noqa: SLF001 - the one place intent changes
 
@@ -505,7 +508,7 @@ def test_with_an_instructor_only_the_token_changes_the_shared_session(
         return modify(changes_of)
 
     monkeypatch.setattr(box, "modify", spy)
-    loop_thread = live._thread.name  # noqa: SLF001
+    receivers = {f"worker-{w['index']}-frames" for w in live.pool.workers()}
     r = send(path, **kw)
     assert r.status_code == 401, r.text
     assert "Authorization: Bearer" in r.json()["detail"] and r.headers["www-authenticate"]
@@ -514,11 +517,11 @@ def test_with_an_instructor_only_the_token_changes_the_shared_session(
     r = send(path.replace("/api/", "/api/sessions/shared/"), **kw)  # the same session
     assert r.status_code == 401
     assert send(path, headers={"Authorization": f"Basic {TOKEN}"}, **kw).status_code == 401
-    assert [w for w in writers if w != loop_thread] == []  # nothing was changed
+    assert [w for w in writers if w not in receivers] == []  # nothing was changed
     assert live.shown_clock is None
     r = send(path, headers={"Authorization": f"Bearer {TOKEN}"}, **kw)
     assert r.status_code in (200, 409), r.text  # 409: a seek while running
-    assert r.status_code == 409 or any(w != loop_thread for w in writers)  # (the spy sees it)
+    assert r.status_code == 409 or any(w not in receivers for w in writers)  # (the spy sees it)
     taught.post("/api/sim/resume", headers={"Authorization": f"Bearer {TOKEN}"})
 
 

@@ -15,18 +15,18 @@ from app.web.lessons import LESSONS
 
 
 @pytest.fixture(scope="module")
-def class_views():
+def class_views(live_pool):
     """A live session and three views on it: the instructor's and two students'."""
     import viser
 
     from app.bench.local_server import free_port
-    from app.live import LiveSim
     from app.live.registry import SessionRegistry
+    from app.live.session import initial_intent
     from app.web.view import View
     from controller.params import ControllerParams
 
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 20}), methods=["fixed", "mpc"])
-    sim.start()
+    params = ControllerParams().replace(walk={"n_steps": 20})
+    sim = live_pool.open(initial_intent(params, ["fixed", "mpc"]), sid="shared")
     registry = SessionRegistry.around(sim)
     servers = []
 
@@ -40,7 +40,7 @@ def class_views():
     finally:
         for server in servers:
             server.stop()
-        sim.stop()
+        live_pool.close(sim)
 
 
 def test_every_view_of_the_session_shows_the_lesson_the_instructor_started(class_views):

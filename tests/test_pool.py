@@ -218,7 +218,9 @@ def test_parts_merge_at_the_slowest_parts_instant():
     lead, other = part_frames("fixed", 8.0), part_frames("mpc", 8.0)
     interval = 1.0 / 30.0  # PUBLISH_HZ at speed 1
     for ahead in (0.0, 0.5, 2.0, ALIGN_S + 1.0):  # [s] the other part runs ahead by
-        pool = SimpleNamespace(publish_hz=30.0, sync_parts=lambda *_: None)
+        pool = SimpleNamespace(
+            publish_hz=30.0, sync_parts=lambda *_: None, clock=time.monotonic, start_delay=1.0
+        )
         s = RemoteSession("m", initial_intent(PARAMS, ["fixed", "mpc"]), pool)
         s.parts = dict.fromkeys(("fixed", "mpc"), SimpleNamespace(send=lambda _m: None))
         merged: list = []

@@ -14,15 +14,15 @@ from types import SimpleNamespace
 import pytest
 
 from app.cli import main
-from app.live import LiveSim
 from app.live.history import ROW_COLUMNS
+from app.live.session import SessionView
 from app.web import recording
 from app.web.recording import check_seconds, decimate, kept_seconds
 
 FILES = {"index.html", "scene.html", "timeseries.csv", "plots.png", "README.txt"}
 
 
-LIVE_SIM = {"methods": ["mpc"], "speed": 4.0}  # one robot at 4x: seconds are kept quickly
+LIVE_SESSION = {"methods": ["mpc"], "speed": 4.0}  # one robot at 4x: seconds are kept quickly
 APP_OPTIONS = {"viser_port": 18767}
 
 
@@ -33,7 +33,7 @@ def _recorders_stopped():
     recording.shutdown()
 
 
-def _keep_at_least(live: LiveSim, seconds: float) -> None:
+def _keep_at_least(live: SessionView, seconds: float) -> None:
     """Wait until ``seconds`` of frames and of plot rows are kept (the robots plot nothing
     while they stand by to start)."""
 
@@ -47,7 +47,7 @@ def _keep_at_least(live: LiveSim, seconds: float) -> None:
         assert frame is not None, "the live simulation stopped publishing"
 
 
-def _frame_gap(live: LiveSim) -> float:
+def _frame_gap(live: SessionView) -> float:
     """[s] the largest gap in simulated time between two kept frames: a window starts at its
     first kept frame, up to that much after the window's start (frames come at the display rate
     in wall time, so a loop slowed by the machine's other jobs keeps them further apart)."""
@@ -55,7 +55,7 @@ def _frame_gap(live: LiveSim) -> float:
     return max((b - a for a, b in zip(kept[:-1], kept[1:], strict=True)), default=0.0)
 
 
-def _still_running(live: LiveSim) -> None:
+def _still_running(live: SessionView) -> None:
     frame = live.frame()
     for _ in range(3):
         frame = live.wait_frame(frame.seq, timeout=30)

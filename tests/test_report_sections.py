@@ -13,6 +13,7 @@ from app.experiments.claims import evaluate
 from app.experiments.definitions import AUTHORS, QUICK, Falls, Pushes
 from app.experiments.energy import EnergyCell, EnergySection, joint_groups
 from app.experiments.kappa import KappaSection
+from app.experiments.outcomes import RunSummary, case_key, failure_reasons, length_key
 from app.experiments.report import render
 from app.experiments.results import Meta, StudyResults
 from app.experiments.robustness import (
@@ -25,7 +26,6 @@ from app.experiments.robustness import (
     trade_cells,
     trade_jobs,
 )
-from app.experiments.runs import RunSummary, case_key, failure_reasons, length_key
 from app.experiments.sensitivity import SensitivityRow, SensitivitySection, effective, reads
 from app.experiments.waist import LateralCase, LateralSection, WaistSection, sine_share
 from app.experiments.yaw import YawSection
@@ -211,8 +211,12 @@ def test_sections_render_with_intact_tables():
     assert "| 0.30 | right | — | 90 / 92 | 90 / 92 | 80 / 82 |" in eight  # both directions
     assert "| push left at 0.30 m | 80-82 N | 90-92 N | less |" in eight
     # the stability claim: the MPC survives less in both directions, falls as often (n.s.)
-    assert "- **does not hold**: the MPC's pelvic rotation is more stable" in eight
-    assert "the MPC more stable in 0, less in 2, tied in 1 of 3" in eight
+    # two conditions against the MPC cannot pass a sign test, the falls are n.s.: the
+    # evidence cannot tell
+    assert "- **inconclusive**: the MPC's pelvic rotation is more stable" in eight
+    assert (
+        "pushes: cannot tell (largest push survived in 2 conditions: the MPC more in 0, " in eight
+    )
     # what the default gain costs, stated beside it
     assert "k_pel = 0.25, the MPC's waist peaks at 25.0 deg over a walk of 0.40 m steps" in eight
     assert "80 against 90 N to the left (-10 N)" in eight
@@ -249,13 +253,18 @@ def test_summary_and_glossary_at_the_top():
     assert 3 <= len(lines) <= 10
     assert "+0.12 m (pelvis.k_pel = 0.45" in summary
     assert "runs that fell: fixed 0/2, redundancy 0/2, mpc 1/2" in summary
-    # the plain paragraph first, then the gain with its cost, then the stability verdict
-    first = summary.strip().split("\n")[0]
-    assert not first.startswith("- ") and "longest step" in first
-    assert "falls in 28 of 40 walks against 19 of 40" in first
+    # the plain paragraphs first (the answer, then the tally), then the gain with its cost,
+    # then the stability verdict
+    paragraphs = summary.strip().split("\n\n")
+    answer = paragraphs[1]
+    assert not answer.startswith("- ") and answer.startswith("**The answer.**")
+    assert "longest step" in answer
+    assert "the MPC falls in 28 of 40 walks against 19 of 40" in answer
+    assert "Of the paper's" in paragraphs[2] and "inconclusive" in paragraphs[2]
     assert "The cost of that gain: k_pel = 0.25" in summary
     assert (
-        "**Stability (Sec. VII, section 8): the MPC more stable than redundancy does not" in summary
+        "**Stability (Sec. VII, section 8): the MPC more stable than redundancy: inconclusive"
+        in summary
     )
     glossary = top.split("## Words used in this report")[1]
     for word in ("**clean**", "**walks**", "**DSP / SSP**", "**J_low**", "kappa(legs)", "tie"):
@@ -327,7 +336,7 @@ def test_the_kappa_legs_cells_read_the_run_summary_field():
     read it (they printed "-" when it was looked up among the other keys)."""
     from app.experiments.definitions import Study
     from app.experiments.kappa import kappa_case
-    from app.experiments.runs import RunResult
+    from app.experiments.outcomes import RunResult
 
     study = Study("t", 4, 1, (0.3,), 0.05, (0.3,), 1, 4)
     s = _summary(condition_number_legs_max=76.0, kappa_legs_landing=[70.0, 72.0])

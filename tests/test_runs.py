@@ -6,7 +6,9 @@ import math
 import threading
 import time
 
-from app.live import LiveSim
+from app.live.engines import InProcessEngine
+from app.live.pool import WorkerPool
+from app.live.session import initial_intent
 from controller.params import ControllerParams
 from pelvic_walk.core.run import RunConfig, run, summarize
 from pelvic_walk.core.summary import TIMING_KEYS
@@ -34,13 +36,11 @@ def test_a_headless_run_beside_a_live_session_gives_the_same_summary():
     cfg = RunConfig(params=params, seed=1, perturbation=0.01)
     alone = summarize(run(cfg))
 
-    # Three live robots ticking as fast as they can in another thread (no pacing sleeps).
-    live = LiveSim(
-        ControllerParams().replace(walk={"step_length": 0.3, "n_steps": 6}),
-        methods=["fixed", "redundancy", "mpc"],
-        sleep=lambda _s: None,
-    )
-    live.start()
+    # Three live robots ticking in threads of this process at the fastest speed (4x): the
+    # pool's in-process engine.
+    pool = WorkerPool(1, robots_per_worker=3, engine=InProcessEngine()).start()
+    params = ControllerParams().replace(walk={"step_length": 0.3, "n_steps": 6})
+    live = pool.open(initial_intent(params, ["fixed", "redundancy", "mpc"], speed=4.0))
     try:
         first = live.wait_frame(timeout=30)
         assert first is not None
@@ -52,7 +52,8 @@ def test_a_headless_run_beside_a_live_session_gives_the_same_summary():
         during = [f for f in live.frames.between(first.clock, math.inf) if t0 < f.wall < t1]
         assert len(during) >= 2 and during[-1].clock > during[0].clock
     finally:
-        live.stop()
+        pool.close(live)
+        pool.stop()
     assert live.error is None
     _same(alone, beside)
 

@@ -102,11 +102,11 @@ def test_the_plots_hide_a_set_they_leave_and_never_remove_one(server, frames):
     """Robots shown change (a lesson, a frame before every robot of a session arrived): the
     plots of the robots shown are shown, the others hidden, none removed; a set comes back
     as it was."""
-    from app.live.session import LiveSim
+    from app.live.session import SessionView
     from app.web.plots import LivePlots
 
     removed: list = []
-    sim = LiveSim(PARAMS, methods=["fixed", "mpc"])  # not started: only its history is read
+    sim = SessionView(initial_intent(PARAMS, ["fixed", "mpc"]))  # only its history is read
     plots = LivePlots(server.gui, sim)
     three = frames[-1]
     one = dataclasses.replace(three, robots=three.robots[2:])

@@ -1,7 +1,7 @@
 """schemathesis against the app's ``/openapi.json``: no request may get a 5xx, and the live
 simulation still advances afterwards.
 
-The app (around a real :class:`LiveSim` with short plans) is served by uvicorn on a free
+The app (around a real live session, tests/conftest.py, short plans) is served by uvicorn on a free
 localhost port in a thread of this process; schemathesis's command line runs in a subprocess
 with the phases examples, coverage and fuzzing, only the ``not_a_server_error`` check and a
 ``MAX_TIME_S`` budget. The headless runs that ``POST /api/runs`` starts are real but stopped

@@ -15,7 +15,8 @@ import numpy as np
 import pytest
 
 from app.cli import main as cli_main
-from app.live import FALL_HOLD_S, LiveSim
+from app.live import FALL_HOLD_S
+from app.live.engines import InProcessEngine
 from app.live.pool import WorkerPool
 from app.live.session import initial_intent
 from controller import strategy
@@ -161,7 +162,8 @@ def test_the_api_lists_the_servers_strategies_and_runs_one_by_name(user_file, tm
 
     path = user_file(GAIN, name="gain_api")
     strategy.load_file(str(path))
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 2}), methods=["mpc"])
+    pool = WorkerPool(1, robots_per_worker=1, engine=InProcessEngine()).start()
+    sim = pool.open(initial_intent(ControllerParams().replace(walk={"n_steps": 2}), ["mpc"]))
     with TestClient(create_app(sim)) as client:
         listed = client.get("/api/strategies").json()["strategies"]
         assert [s["name"] for s in listed][:3] == list(strategy.BUILTINS)
@@ -183,6 +185,8 @@ def test_the_api_lists_the_servers_strategies_and_runs_one_by_name(user_file, tm
         # code is never loaded over HTTP: no route takes a file
         assert not [p for p in client.get("/openapi.json").json()["paths"] if "strateg" in p
                     and p != "/api/strategies"]  # fmt: skip
+    pool.close(sim)
+    pool.stop()
 
 
 @pytest.mark.parametrize(
@@ -278,10 +282,10 @@ def test_a_faulty_robot_stops_alone_and_the_others_walk_on(user_file):
 
     path = user_file(FAULTS, name="faults", file="faulty.py")
     strategy.load_file(f"{path}:Raises")
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 20}), methods=["mpc", "raises"],
-                  speed=4.0, sleep=lambda _s: None)  # fmt: skip
+    pool = WorkerPool(1, robots_per_worker=2, engine=InProcessEngine()).start()
+    params = ControllerParams().replace(walk={"n_steps": 20})
+    sim = pool.open(initial_intent(params, ["mpc", "raises"], speed=4.0))
     with TestClient(create_app(sim)) as client:
-        sim.start()
         try:
             f = sim.wait_frame(timeout=60)
             while f is not None and f.robot("mpc").t < 1.0 + FALL_HOLD_S + 1.0:
@@ -301,7 +305,8 @@ def test_a_faulty_robot_stops_alone_and_the_others_walk_on(user_file):
             assert robots["mpc"]["error"] is None
             assert sim.error is None  # the loop itself runs on
         finally:
-            sim.stop()
+            pool.close(sim)
+            pool.stop()
 
 
 def test_the_example_in_the_docs_runs(tmp_path):
@@ -425,10 +430,10 @@ def test_a_strategy_stopped_at_step_3_is_said_stopped_at_step_3_everywhere(user_
     out = capsys.readouterr().out
     assert "3/10 steps" in out and "in step 3 (s.step): ValueError: stop at step 3" in out
 
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 10}), methods=["at_three"],
-                  speed=4.0, sleep=lambda _s: None)  # fmt: skip
+    pool = WorkerPool(1, robots_per_worker=1, engine=InProcessEngine()).start()
+    params = ControllerParams().replace(walk={"n_steps": 10})
+    sim = pool.open(initial_intent(params, ["at_three"], speed=4.0))
     with TestClient(create_app(sim)) as client:
-        sim.start()
         try:
             f = sim.wait_frame(timeout=60)
             while f is not None and f.robot("at_three").error is None:
@@ -437,7 +442,8 @@ def test_a_strategy_stopped_at_step_3_is_said_stopped_at_step_3_everywhere(user_
             robot = client.get("/api/state").json()["robots"][0]
             assert robot["status"] == "stopped" and robot["step_index"] == 3
         finally:
-            sim.stop()
+            pool.close(sim)
+            pool.stop()
 
 
 def test_a_class_without_a_docstring_is_described_by_nothing(user_file):

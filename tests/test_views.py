@@ -191,20 +191,20 @@ def dataclasses_replace(obj, **kw):
 
 
 @pytest.fixture(scope="module")
-def panel_view():
+def panel_view(live_pool):
     """A live session, its API and the panel of a viser view on it (no browser)."""
     import viser
     from fastapi.testclient import TestClient
 
     from app.bench.local_server import free_port
-    from app.live import LiveSim
     from app.live.registry import SessionRegistry
+    from app.live.session import initial_intent
     from app.web.api import create_app
     from app.web.view import View
     from controller.params import ControllerParams
 
-    sim = LiveSim(ControllerParams().replace(walk={"n_steps": 20}), methods=["fixed", "mpc"])
-    sim.start()
+    params = ControllerParams().replace(walk={"n_steps": 20})
+    sim = live_pool.open(initial_intent(params, ["fixed", "mpc"]), sid="shared")
     server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
     registry = SessionRegistry.around(sim)
     view = View(server, sim, registry)
@@ -213,7 +213,7 @@ def panel_view():
         yield sim, view, client
     app.state.runs.shutdown()
     server.stop()
-    sim.stop()
+    live_pool.close(sim)
 
 
 def test_the_panel_the_state_and_the_sessions_list_agree_after_every_transition(panel_view):

@@ -111,8 +111,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--workers",
         type=int,
         default=None,
-        help="worker processes running the robots (default: as many as fill the machine's "
-        "capacity, 6 robots a core, with 3 robots each: 4 on 2 cores; 0: in this process)",
+        help="worker processes running the robots (default: one a core, holding the "
+        "machine's capacity of 6 robots a core: 2 x 6 on 2 cores; 0: the same pool in "
+        "threads of this process)",
     )
     p.add_argument(
         "--sessions",
@@ -125,9 +126,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--robots-per-worker",
         type=positive_int,
         default=None,
-        help="robots one worker runs at once (default: 3, a session's robots, or the capacity "
-        "of 6 robots a core shared out over the --workers given; a worker's robots share one "
-        "core)",
+        help="robots one worker runs at once (default: the capacity of 6 robots a core "
+        "shared out over the workers; a worker's robots share one core)",
     )
     p.add_argument(
         "--display-hz",

@@ -28,8 +28,8 @@ import numpy as np
 from app.experiments.definitions import Study, sweep_bracket
 from app.experiments.kappa import kappa_case
 from app.experiments.limits import figure_lengths_run
+from app.experiments.outcomes import Results, RunSummary, length_key, step_of, summary_of
 from app.experiments.robustness import PushCell, push_key
-from app.experiments.runs import Results, RunSummary, length_key, step_of, summary_of
 from app.experiments.waist import waist_case
 from controller import strategy
 from pelvic_walk.core.measure import walks
@@ -57,6 +57,7 @@ class AblationRow:
     kappa_legs_landing: float | None  # median at landing, the longer figure length
     pushes: dict[str, PushCell | None] = field(default_factory=dict)  # direction -> survival
     strategy_ms_median: float | None = None  # the strategy's median time a tick [ms]
+    energy_std_substep: dict[str, float | None] = field(default_factory=dict)  # ... 1 ms
 
 
 @dataclass(frozen=True)
@@ -111,6 +112,7 @@ def row(
         energy={length_key(x): _energy(s, substep=False) for x, s in at.items()},
         energy_substep={length_key(x): _energy(s, substep=True) for x, s in at.items()},
         energy_std={length_key(x): _energy_std(s) for x, s in at.items()},
+        energy_std_substep={length_key(x): _energy_std(s, substep=True) for x, s in at.items()},
         early_turn_share=turn.early_turn_share if turn else None,
         early_turn_of_sine=turn.early_turn_of_sine if turn else None,
         peak_rate_change_deg_s2=turn.peak_abs_rate_change_deg_s2 if turn else None,
@@ -128,8 +130,8 @@ def _energy(s: RunSummary | None, substep: bool) -> float | None:
     return float(np.mean(windows)) if windows else None
 
 
-def _energy_std(s: RunSummary | None) -> float | None:
-    w = s.energy_two_step_windows if s else []
+def _energy_std(s: RunSummary | None, substep: bool = False) -> float | None:
+    w = (s.energy_two_step_windows_substep if substep else s.energy_two_step_windows) if s else []
     return float(np.std(w, ddof=1)) if len(w) > 1 else None
 
 
@@ -144,7 +146,7 @@ def ablation(
     others = study.ablation_methods()
     if not others:
         return None
-    paper = [m for m in (strategy.FIXED, strategy.MPC) if m in study.methods]
+    paper = [m for m in (strategy.FIXED, strategy.REDUNDANCY, strategy.MPC) if m in study.methods]
     x_push = study.ablations.push_length if study.ablations else max(study.figure_lengths)
     return AblationSection(
         lengths=list(study.figure_lengths),
@@ -186,7 +188,8 @@ def reading(section: AblationSection) -> list[str]:
                 f"(MPC {100 * mpc.early_turn_share:.1f} %)"
             )
         margins = [
-            f"{_diff(_n(c), _n(mpc.pushes.get(d)), 'N', '+.0f')} {d}" for d, c in r.pushes.items()
+            f"{_diff(push_n(c), push_n(mpc.pushes.get(d)), 'N', '+.0f')} {d}"
+            for d, c in r.pushes.items()
         ]
         if margins:
             parts.append(
@@ -215,9 +218,9 @@ def buys(section: AblationSection, w: AblationRow) -> str:
             grid = " (one step of the grid)" if abs(d) <= section.resolution + 1e-9 else ""
             parts.append(f"{d:+.2f} m of longest clean step{grid}")
     gaps = {
-        d: _n(mpc.pushes.get(d)) - _n(c)  # type: ignore[operator]
+        d: push_n(mpc.pushes.get(d)) - push_n(c)  # type: ignore[operator]
         for d, c in w.pushes.items()
-        if _n(c) is not None and _n(mpc.pushes.get(d)) is not None
+        if push_n(c) is not None and push_n(mpc.pushes.get(d)) is not None
     }
     if gaps:
         if all(abs(g) <= section.push_resolution + 1e-9 for g in gaps.values()):
@@ -253,5 +256,5 @@ def _deg(v: float | None) -> str:
     return "—" if v is None else f"{v:.1f} deg"
 
 
-def _n(c: PushCell | None) -> float | None:
+def push_n(c: PushCell | None) -> float | None:
     return c.survived if c is not None else None

@@ -5,11 +5,22 @@ from __future__ import annotations
 
 import dataclasses
 
-from app.experiments import ablation, balance, claims, energy, kappa, limits, robustness, waist, yaw
+from app.experiments import (
+    ablation,
+    balance,
+    claims,
+    energy,
+    kappa,
+    limits,
+    reach,
+    robustness,
+    waist,
+    yaw,
+)
 from app.experiments.definitions import Study
+from app.experiments.outcomes import Results
 from app.experiments.results import Meta, RunRecord, StudyResults
 from app.experiments.robustness import PushCell
-from app.experiments.runs import Results
 from app.experiments.sensitivity import SensitivitySection, lateral_limits
 from pelvic_walk.core.run_spec import Override
 
@@ -21,6 +32,8 @@ def analyse(
     sens: SensitivitySection | None = None,
     pushes: dict[str, PushCell | None] | None = None,
     cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] | None = None,
+    reach_outcomes: dict[str, dict | None] | None = None,
+    grid_pushes: dict[str, PushCell | None] | None = None,
 ) -> StudyResults:
     """Every section's numbers, the claims' verdicts, and every run's summary."""
     ms = limits.max_step(study, results)
@@ -36,9 +49,10 @@ def analyse(
         zmp=balance.zmp(study, results),
         lateral=waist.lateral(study, results, lateral_limits(sens)),
         balance=balance.balance(study, results),
-        robustness=robustness.robustness(study, results, pushes, sens, cell_pushes),
+        robustness=robustness.robustness(study, results, pushes, sens, cell_pushes, grid_pushes),
         sensitivity=sens,
         ablation=ablation.ablation(study, results, pushes),
+        reach=reach.reach_section(reach_outcomes or {}),
         runs={
             s.key: RunRecord(
                 s, r.wall_s, r.error, r.summary.as_dict() if r.summary else None, s.command()

@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from app.experiments.definitions import Study
-from app.experiments.runs import Results, case_key, summary_of, zmp_of
+from app.experiments.outcomes import Results, case_key, summary_of, zmp_of
 from controller.strategy import MPC
 
 BALANCE_LENGTHS = (0.15, 0.20, 0.25, 0.30, 0.35, 0.40)  # [m] Table 1's lengths

@@ -111,6 +111,10 @@ class Pushes:
     resolution: float = 2.0  # [N] largest bracket (survived .. toppled)
     f_high: float = 256.0  # [N] top of the bisection (a power of two times the resolution)
     trade_length: float = 0.30  # [m] where the sensitivity cells' push margin is measured
+    # the stability claim's pushes beyond mid single support of the third step: at
+    # ``grid_length``, each (pushed step, phase of its single support) below, both directions
+    grid_length: float = 0.30  # [m]
+    grid: tuple[tuple[int, float], ...] = ((2, 0.25), (2, 0.75), (3, 0.25), (3, 0.5), (3, 0.75))
 
 
 @dataclass(frozen=True)
@@ -227,6 +231,14 @@ class Study:
         return spec == self.figure_run(spec.method, spec.step_length)
 
 
+AUTHORS_CELL = "the authors' DSP and step width"
+BETA_CELL = "the paper's beta_pel (1e-10)"
+NO_ACC_BOUND_CELL = "no yaw-acceleration bound (pelvis.acc_limit = 100)"
+# the paper's values of parameters where ours differ (app.experiments.deviations)
+_PAPER_CELLS = (
+    SensitivityCell(BETA_CELL, (("pelvis.beta", 1e-10),), (MPC,)),
+    SensitivityCell(NO_ACC_BOUND_CELL, (("pelvis.acc_limit", 100.0),), (MPC,)),
+)
 _LATERAL_CELLS = tuple(
     SensitivityCell(f"lateral distance: {m}", ((LATERAL, m),), (MPC,))
     for m in LATERAL_MODES
@@ -245,8 +257,9 @@ FULL = Study(
         rows=("pelvis.k_pel", (0.15, 0.25, 0.35, 0.45)),
         columns=("walk.dsp_ratio", (0.1, 0.2, 0.3)),
         cells=(
-            SensitivityCell("the authors' DSP and step width", AUTHORS),
+            SensitivityCell(AUTHORS_CELL, AUTHORS),
             *_LATERAL_CELLS,
+            *_PAPER_CELLS,
         ),
     ),
     pushes=Pushes(),
@@ -265,13 +278,13 @@ QUICK = Study(
     sensitivity=Sensitivity(
         rows=("pelvis.k_pel", (0.25, 0.45)),
         columns=("walk.dsp_ratio", (0.2, 0.3)),
-        cells=(SensitivityCell("the authors' DSP and step width", AUTHORS),),
+        cells=(SensitivityCell(AUTHORS_CELL, AUTHORS),),
         steps=4,
         search=(0.30, 0.50, 0.05),
         landings=(0.01, 0.02, 0.03),
         kappas=(300.0, 1000.0),
     ),
-    pushes=Pushes(lengths=(0.30,), resolution=64.0),
+    pushes=Pushes(lengths=(0.30,), resolution=64.0, grid=((3, 0.5),)),  # one extra condition
     falls=Falls(walks=3, steps=6),
     ablations=Ablations(),
 )

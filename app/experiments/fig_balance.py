@@ -10,8 +10,8 @@ from matplotlib.patches import Rectangle
 from app.experiments.balance import EDGE_MARGIN
 from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, plt
+from app.experiments.outcomes import Results, array, zmp_of
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results, array, zmp_of
 from controller.strategy import MPC
 from models.dyros_jet import FOOT_SIZE
 from pelvic_walk.core.methods import method_hex

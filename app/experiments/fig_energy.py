@@ -11,8 +11,8 @@ from app.experiments import paper
 from app.experiments.definitions import Study
 from app.experiments.energy import JOINT_GROUPS, joint_groups
 from app.experiments.fig_style import finish, label, plt
+from app.experiments.outcomes import Results, length_key
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results, length_key
 from pelvic_walk.core.methods import method_hex
 
 

@@ -7,8 +7,8 @@ from pathlib import Path
 
 from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, label, plt, shade_dsp
+from app.experiments.outcomes import Results, array, step_of
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results, array, step_of
 from controller.kinematics import KAPPA_CAP
 from controller.strategy import FIXED
 from pelvic_walk.core.methods import method_hex

@@ -8,8 +8,8 @@ from pathlib import Path
 from app.experiments import paper
 from app.experiments.definitions import Study
 from app.experiments.fig_style import label, plt, save
+from app.experiments.outcomes import Results
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results
 from pelvic_walk.core.methods import method_hex
 
 

@@ -11,8 +11,8 @@ from matplotlib.patches import Patch
 
 from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, label, plt
+from app.experiments.outcomes import Results, case_key
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results, case_key
 from pelvic_walk.core.methods import method_hex
 from pelvic_walk.core.metrics import LANDING_ERROR_CLEAN
 from pelvic_walk.core.run_spec import DISTURBANCE

@@ -12,8 +12,8 @@ import numpy as np
 from app.experiments import paper
 from app.experiments.definitions import Study
 from app.experiments.fig_style import finish, plt
+from app.experiments.outcomes import Results
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results
 from app.experiments.sensitivity import SensitivitySection
 from controller.strategy import FIXED, MPC
 

@@ -7,8 +7,8 @@ from pathlib import Path
 from app.experiments import paper
 from app.experiments.definitions import ROTATING, Study
 from app.experiments.fig_style import DEG, finish, label, plt, shade_dsp
+from app.experiments.outcomes import Results, array, step_of
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results, array, step_of
 from controller.strategy import MPC
 from pelvic_walk.core.methods import method_hex
 

@@ -6,8 +6,8 @@ from pathlib import Path
 
 from app.experiments.definitions import Study
 from app.experiments.fig_style import NO_ARMS_GREY, finish, label, plt
+from app.experiments.outcomes import Results, array, case_key, walk_of
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results, array, case_key, walk_of
 from pelvic_walk.core.methods import method_hex
 
 

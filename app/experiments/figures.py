@@ -15,8 +15,8 @@ from app.experiments.fig_robustness import fig_robustness
 from app.experiments.fig_sensitivity import fig_sensitivity, fig_thresholds
 from app.experiments.fig_waist import fig_waist
 from app.experiments.fig_yaw import fig_yaw_momentum
+from app.experiments.outcomes import Results
 from app.experiments.results import StudyResults
-from app.experiments.runs import Results
 
 Figure = Callable[[Study, Results, StudyResults, Path], str | None]
 FIGURES: dict[str, Figure] = {

@@ -22,7 +22,7 @@ import numpy as np
 
 from app.experiments.definitions import ROTATING, Study
 from app.experiments.limits import MaxStep, figure_lengths_run
-from app.experiments.runs import (
+from app.experiments.outcomes import (
     Results,
     array,
     case_key,

@@ -14,8 +14,8 @@ from typing import Any
 
 from app.experiments import paper
 from app.experiments.definitions import Study, sweep_bracket
+from app.experiments.outcomes import Results, RunSummary, failure_reasons, summary_of
 from app.experiments.paper import KinematicLimits
-from app.experiments.runs import Results, RunSummary, failure_reasons, summary_of
 from pelvic_walk.core.measure import walks
 from pelvic_walk.core.run_spec import length
 

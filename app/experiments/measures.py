@@ -21,8 +21,8 @@ from typing import Any, cast
 from app.experiments import paper
 from app.experiments.definitions import ROTATING, Study
 from app.experiments.energy import EnergyCell, EnergySection, order_means, order_stds
+from app.experiments.outcomes import case_key, length_key
 from app.experiments.results import StudyResults
-from app.experiments.runs import case_key, length_key
 from app.experiments.waist import sine_share
 from controller.strategy import FIXED, MPC, REDUNDANCY
 from pelvic_walk.core.metrics import KAPPA_SINGULAR
@@ -59,6 +59,37 @@ def kinematics(study: Study, r: StudyResults) -> Measured:
     )
 
 
+ANALYSIS_SIMILAR = 0.03  # [m] "similar" to eq. (4)-(5): within 3 steps of the 0.01 m grid
+
+
+def limits_vs_analysis(study: Study, r: StudyResults) -> Measured:
+    """Our longest clean steps against eq. (4) (fixed) and eq. (5) (rotating) on our robot's
+    dimensions (Sec. VI-B: "similar to the value analyzed in Section II"). The paper's own gaps
+    are 0.01 and 0.02 m; "similar" is read as within :data:`ANALYSIS_SIMILAR`."""
+    o = r.kinematics.ours
+    f, red, m = (r.max_step[k].longest_clean for k in (FIXED, REDUNDANCY, MPC))
+    if f is None or m is None:
+        return None
+    eq4, eq5 = o["step_max_fixed_static"], o["step_max_rotation_static"]
+    gaps = {"fixed": f - eq4, "mpc": m - eq5}
+    if red is not None:
+        gaps["redundancy"] = red - eq5
+    near = sum(abs(g) <= ANALYSIS_SIMILAR + 1e-9 for g in gaps.values())
+    return dict(
+        eq4=eq4,
+        eq5=eq5,
+        fixed=f,
+        mpc=m,
+        redundancy=red if red is not None else float("nan"),
+        gap_fixed=gaps["fixed"],
+        gap_mpc=gaps["mpc"],
+        gap_redundancy=gaps.get("redundancy", float("nan")),
+        near=near,
+        n=len(gaps),
+        share=near / len(gaps),
+    )
+
+
 def max_step(study: Study, r: StudyResults) -> Measured:
     f, red, m = (r.max_step[k].longest_clean for k in (FIXED, REDUNDANCY, MPC))
     if f is None or m is None:
@@ -90,14 +121,38 @@ def waist_amplitude(study: Study, r: StudyResults) -> Measured:
     )
 
 
+def _other_readings(r: StudyResults) -> list[Any]:
+    """The MPC at the long length with the prediction but another reading of the lateral
+    distance of eq. (31)-(32) than the default (section 3's table)."""
+    lat = r.lateral
+    if lat is None:
+        return []
+    return [
+        c
+        for k, c in lat.cases.items()
+        if c is not None and not c.default and abs(c.step_length - LONG) < 1e-9
+    ]
+
+
+def _readings_words(others: list[Any]) -> str:
+    if not others:
+        return "not run"
+    return ", ".join(
+        f"{c.mode} {100 * c.early_turn_share:+.1f} % ({'an' if c.anticipates else 'no'} early turn)"
+        for c in others
+    )
+
+
 def waist_turns_early(study: Study, r: StudyResults) -> Measured:
-    """When each method's turn toward the coming swing starts (``waist.turn_onset``), the
-    rate's sign at the lift-off and the turn's size before it, against a sine's; the DSP share
-    beside it."""
+    """Each method's turn toward the coming swing before the lift-off: its size (against a
+    sine's) and the rate's sign at the lift-off (``waist.turn_onset``); the other readings of
+    the lateral distance beside it. The onset's time is not cited: it is the same (+0.24 s)
+    in every variant, the ablation's included, so it tells none apart."""
     mpc, red = _waist_pair(r)
     if not (mpc and red):
         return None
     sine = sine_share(mpc.dsp_time / mpc.step_time)
+    others = _other_readings(r)
     return dict(
         length=LONG,
         mpc_anticipates=mpc.anticipates,
@@ -113,12 +168,16 @@ def waist_turns_early(study: Study, r: StudyResults) -> Measured:
         red_early=100 * red.early_turn_share,
         mpc_of_sine=mpc.early_turn_share / sine if sine else float("nan"),
         mpc_of_sine_percent=100 * mpc.early_turn_share / sine if sine else float("nan"),
+        others=_readings_words(others),
+        n_others_anticipate=sum(c.anticipates for c in others),
+        n_others=len(others),
     )
 
 
 def waist_from_prediction(study: Study, r: StudyResults) -> Measured:
-    """The MPC's early turn with its reference from the prediction (the default) and from the
-    state now held over the horizon (the ablation), at the long length."""
+    """Is the prediction necessary for the MPC's early turn (without it, the reference from
+    the state now held over the horizon, the turn is gone) and sufficient (with it, every
+    reading of the lateral distance turns early)? At the long length."""
     mpc, _ = _waist_pair(r)
     lat = r.lateral
     abl = lat.ablation.get(case_key(lat.default_mode, LONG)) if lat else None
@@ -126,16 +185,20 @@ def waist_from_prediction(study: Study, r: StudyResults) -> Measured:
         return None
     sine = sine_share(mpc.dsp_time / mpc.step_time)
     ratio = abl.early_turn_share / mpc.early_turn_share if mpc.early_turn_share > 0 else math.nan
+    others = _other_readings(r)
     return dict(
         length=LONG,
         mpc_anticipates=mpc.anticipates,
         abl_anticipates=abl.anticipates,
+        necessary=bool(mpc.anticipates and not abl.anticipates),
+        sufficient=bool(mpc.anticipates and all(c.anticipates for c in others)),
         mpc_early=100 * mpc.early_turn_share,
         abl_early=100 * abl.early_turn_share,
         abl_rate=abl.rate_at_liftoff_toward_swing_deg_s,
         mpc_rate=mpc.rate_at_liftoff_toward_swing_deg_s,
         sine=100 * sine,
         abl_of_mpc=ratio,
+        others=_readings_words(others),
     )
 
 
@@ -150,6 +213,31 @@ def waist_sharp(study: Study, r: StudyResults) -> Measured:
         ratio=red.peak_abs_rate_change_deg_s2 / max(mpc.peak_abs_rate_change_deg_s2, 1e-9),
         red_rate=red.peak_abs_rate_deg_s,
         mpc_rate=mpc.peak_abs_rate_deg_s,
+    )
+
+
+def rate_growth(study: Study, r: StudyResults) -> Measured:
+    """Each rotating method's peak |waist rate| at the short and the long figure length and
+    its growth (the introduction: redundancy's rate "increased rapidly as the step length
+    increased")."""
+    short, long_ = min(paper.FIGURE_LENGTHS), LONG
+    c = r.waist.cases
+    red0, red1 = c.get(case_key(REDUNDANCY, short)), c.get(case_key(REDUNDANCY, long_))
+    mpc0, mpc1 = c.get(case_key(MPC, short)), c.get(case_key(MPC, long_))
+    if not (red0 and red1 and mpc0 and mpc1):
+        return None
+    red_g = red1.peak_abs_rate_deg_s / max(red0.peak_abs_rate_deg_s, 1e-9)
+    mpc_g = mpc1.peak_abs_rate_deg_s / max(mpc0.peak_abs_rate_deg_s, 1e-9)
+    return dict(
+        short=short,
+        long=long_,
+        red0=red0.peak_abs_rate_deg_s,
+        red1=red1.peak_abs_rate_deg_s,
+        mpc0=mpc0.peak_abs_rate_deg_s,
+        mpc1=mpc1.peak_abs_rate_deg_s,
+        red_growth=red_g,
+        mpc_growth=mpc_g,
+        over_mpc=red_g / max(mpc_g, 1e-9),
     )
 
 
@@ -178,6 +266,29 @@ def yaw_redundancy_higher(study: Study, r: StudyResults) -> Measured:
         return None
     return dict(
         red=red.no_arms.peak, mpc=mpc.no_arms.peak, excess=red.no_arms.peak - mpc.no_arms.peak
+    )
+
+
+def yaw_landing_rapid(study: Study, r: StudyResults) -> Measured:
+    """Without arm swing at the long length: the peak |d momentum/dt| within 0.1 s of a
+    touch-down, redundancy against the MPC (Sec. VI-C: redundancy's momentum "changes
+    rapidly" at landing), and each one's peak elsewhere."""
+    red = r.yaw_momentum.cases.get(case_key(REDUNDANCY, LONG))
+    mpc = r.yaw_momentum.cases.get(case_key(MPC, LONG))
+    if not (red and mpc and red.no_arms.landing_rate_peak and mpc.no_arms.landing_rate_peak):
+        return None
+    a, b = red.no_arms, mpc.no_arms
+    at_a, at_b = cast(float, a.landing_rate_peak), cast(float, b.landing_rate_peak)
+    nan = float("nan")
+    return dict(
+        length=LONG,
+        red=at_a,
+        mpc=at_b,
+        red_rest=a.other_rate_peak if a.other_rate_peak is not None else nan,
+        mpc_rest=b.other_rate_peak if b.other_rate_peak is not None else nan,
+        ratio=at_a / at_b,
+        # the change is at landing: redundancy's fastest change is there, not elsewhere
+        at_landing=bool(a.other_rate_peak is None or at_a >= a.other_rate_peak),
     )
 
 
@@ -248,6 +359,7 @@ def energy_std_gap(study: Study, r: StudyResults) -> Measured:
         p=p,
         p_text="p < 0.001" if p < 0.001 else f"p = {p:.2g}",
         grows=bool(rho > 0 and p < 0.05),
+        shrinks=bool(rho < 0 and p < 0.05),
         last_smaller=order_stds(a_last, b_last) == -1,
         last=pairs[-1][0],
         details=details,
@@ -329,9 +441,11 @@ def energy_least(study: Study, r: StudyResults) -> Measured:
         return None
     at = {round(x, 3): v for x, v in status.items()}
     agree = sum(at[round(x, 3)] == "least" for x in judged)
+    missed = sum(at[round(x, 3)].startswith("below") for x in judged)
     ours_not = [x for x in sorted(status) if status[x] != "least"]
     return dict(
         agree=agree,
+        missed=missed,
         n=len(judged),
         share=agree / len(judged),
         least=", ".join(f"{x:.2f}" for x in sorted(status) if status[x] == "least") or "none",
@@ -361,6 +475,16 @@ def _kappa_ratio_at(r: StudyResults, x: float | None) -> Measured:
 def kappa_ratio_paper_length(study: Study, r: StudyResults) -> Measured:
     """Fixed / rotating kappa(J_low) at landing at the paper's length."""
     return _kappa_ratio_at(r, paper.KAPPA_RATIO_LENGTH)
+
+
+def kappa_ratio_diverging_length(study: Study, r: StudyResults) -> Measured:
+    """Fixed / rotating kappa(J_low) at landing at the paper's 0.35 m, the lesser of the two
+    rotating methods' ratios (the paper: "close to twice that of walking with pelvic
+    rotation")."""
+    m = _kappa_ratio_at(r, paper.KAPPA_DIVERGES_LENGTH)
+    if m is None:
+        return None
+    return m | {"least": min(m["ratio"], m["ratio_redundancy"])}
 
 
 def kappa_ratio_own_limit(study: Study, r: StudyResults) -> Measured:
@@ -467,10 +591,64 @@ def _tally(comps: list[Any]) -> dict[str, int]:
     return dict(wins=wins, losses=losses, ties=len(comps) - wins - losses, n=len(comps))
 
 
+SMOOTHER = 1.5  # redundancy's peak |d rate/dt| over the MPC's that reads "smoother"
+READ_WORDS = {-1: "the MPC more stable", 0: "cannot tell", 1: "redundancy more stable"}
+
+
+def _readings(study: Study, r: StudyResults, comps: list[Any]) -> dict[str, tuple[int, str]]:
+    """Each reading of "more stable", MPC against redundancy: -1 the MPC, +1 redundancy, 0
+    the evidence cannot tell; with its numbers in words."""
+    from app.experiments.robustness import sign_p
+
+    out: dict[str, tuple[int, str]] = {}
+    pushes = [c for c in comps if c.what.startswith("push")]
+    if pushes:
+        t = _tally(pushes)
+        p = sign_p(t["wins"], t["losses"])
+        order = 0 if p >= 0.05 else (-1 if t["wins"] > t["losses"] else 1)
+        out["pushes"] = (
+            order,
+            f"largest push survived in {t['n']} conditions: the MPC more in {t['wins']}, less "
+            f"in {t['losses']}, within the bisection's resolution in {t['ties']} (sign test p = "
+            f"{p:.2g})",
+        )
+    falls = [c for c in comps if c.what.startswith("falls")]
+    if falls:
+        sig = [c.order for c in falls if c.order]
+        order = 0 if not sig or len(set(sig)) > 1 else sig[0]
+        out["falls"] = (order, "; ".join(f"{c.what}: {c.a} vs {c.b}" for c in falls))
+    sharp = waist_sharp(study, r)
+    if sharp:
+        ratio = sharp["ratio"]
+        order = -1 if ratio > SMOOTHER else (1 if ratio < 1 / SMOOTHER else 0)
+        out["rate smoothness"] = (
+            order,
+            f"peak |d rate/dt| at {sharp['length']:g} m redundancy / MPC x{ratio:.1f} "
+            f"(smoother beyond x{SMOOTHER:g})",
+        )
+    from app.experiments.energy import order_stds
+
+    e = r.energy.at_substep()
+    pairs = _pair_cells(e, MPC, REDUNDANCY, e.lengths)
+    if pairs:
+        orders = [order_stds(a, b) for _, a, b in pairs]
+        wins, losses = orders.count(-1), orders.count(1)
+        order = -1 if wins * 2 >= len(orders) and not losses else (1 if losses > wins else 0)
+        out["trajectory consistency"] = (
+            order,
+            f"the energy's std over the repeats (1 ms; the paper's own basis, Sec. VI-D): the "
+            f"MPC's smaller at {wins}, larger at {losses} of {len(orders)} lengths",
+        )
+    return out
+
+
 def stability(study: Study, r: StudyResults) -> Measured:
-    """The MPC against redundancy on every stability measure of section 8 (the largest push
-    survived at each length and direction, the falls at each push size); the fixed pelvis
-    beside it (what turning the pelvis costs)."""
+    """The MPC against redundancy, reading by reading: our pushes (the largest push survived
+    at each length and direction; a difference counts beyond the bisection's resolution, and
+    the conditions' direction must pass a sign test), our falls at each push size (Fisher's
+    exact test), and the paper's own basis for its sentence: the waist rate's smoothness
+    (Sec. V-C) and the trajectory's consistency over repeats (the energy's std, Sec. VI-D).
+    Each reading says the MPC, redundancy, or cannot tell; the fixed pelvis beside it."""
     from app.experiments.robustness import stability as compare
 
     rob = r.robustness
@@ -479,12 +657,22 @@ def stability(study: Study, r: StudyResults) -> Measured:
     comps = compare(rob, MPC, REDUNDANCY)
     if not comps:
         return None
+    readings = _readings(study, r, comps)
+    favor = sum(o < 0 for o, _ in readings.values())
+    against = sum(o > 0 for o, _ in readings.values())
     t = _tally(comps)
-    fixed = _tally(compare(rob, MPC, FIXED))
+    fixed = _tally([c for c in compare(rob, MPC, FIXED) if c.what.startswith("push")])
     return dict(
         **t,
-        share=t["wins"] / t["n"],
-        net=t["wins"] - t["losses"],
+        favor=favor,
+        against=against,
+        n_readings=len(readings),
+        favor_share=favor / len(readings),
+        net_readings=favor - against,
+        readings={k: READ_WORDS[o] for k, (o, _) in readings.items()},
+        reading_rows=[[k, READ_WORDS[o], w] for k, (o, w) in readings.items()],
+        n_push=sum(c.what.startswith("push") for c in comps),
+        reading_words="; ".join(f"{k}: {READ_WORDS[o]} ({w})" for k, (o, w) in readings.items()),
         details="; ".join(f"{c.what}: {c.a} vs {c.b}" for c in comps),
         fixed_wins=fixed["wins"],
         fixed_losses=fixed["losses"],

@@ -25,16 +25,26 @@ from app.experiments.definitions import (
     AUTHORS_REST,
     AUTHORS_WIDTH,
     ROTATING,
+    Pushes,
     Study,
 )
-from app.experiments.energy import BOOTSTRAP, SIGNIFICANCE, joint_groups, std_gap_p
+from app.experiments.deviations import DEVIATIONS, paper_value_words
+from app.experiments.energy import (
+    BOOTSTRAP,
+    MIN_EFFECT_MEAN,
+    MIN_EFFECT_STD,
+    SIGNIFICANCE,
+    joint_groups,
+    std_gap_p,
+)
 from app.experiments.kappa import NEAR_BELOW
+from app.experiments.outcomes import case_key, length_key
+from app.experiments.reach import QUANTITIES
 from app.experiments.results import ClaimResult, StudyResults
 from app.experiments.robustness import PushCell, RobustnessSection, falls_p, stability
-from app.experiments.runs import case_key, length_key
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.summary import plain, summary_lines, trade_words
-from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
+from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, INCONCLUSIVE, NOT_MEASURED, PARTLY
 from app.experiments.waist import ANTICIPATION_MIN, EARLY_TURN_MIN, sine_share
 from app.experiments.worker import LANDING_WINDOW
 from controller.params import LATERAL_MODES, ControllerParams
@@ -52,6 +62,7 @@ VERDICT_MARK = {
     HOLDS: "**holds**",
     PARTLY: "**partly**",
     FAILS: "**does not hold**",
+    INCONCLUSIVE: "**inconclusive**",
     DEPENDS: "**depends on the reading**",
     NOT_MEASURED: "not measured",
 }
@@ -146,9 +157,14 @@ def verdict_cell(c: ClaimResult) -> str:
     """A claim's verdict; where it depends on the reading, each reading's (e.g. "partly at
     200 Hz, does not hold at 1 ms")."""
     out = VERDICT_MARK.get(c.verdict, c.verdict)
-    if c.verdict != DEPENDS:
-        return out
-    return out + " (" + ", ".join(f"{v} at {k}" for k, v in c.variants.items()) + ")"
+    if c.verdict == DEPENDS:
+        return out + " (" + ", ".join(f"{v} at {k}" for k, v in c.variants.items()) + ")"
+    others = {k: v for k, v in c.variants.items() if k != c.reading}
+    if others:  # a primary reading decided; the others beside it
+        return (
+            out + f" (at {c.reading}; " + ", ".join(f"{v} at {k}" for k, v in others.items()) + ")"
+        )
+    return out
 
 
 def robustness_totals(rob: RobustnessSection, methods: Sequence[str]) -> dict[str, dict]:
@@ -250,6 +266,12 @@ def _environment() -> jinja2.Environment:
         DISTURBANCE=DISTURBANCE,
         DISTURBANCE_PERIOD=DISTURBANCE_PERIOD,
         SIGNIFICANCE=SIGNIFICANCE,
+        MIN_EFFECT_MEAN=MIN_EFFECT_MEAN,
+        MIN_EFFECT_STD=MIN_EFFECT_STD,
+        push_resolution=Pushes().resolution,
+        deviations=DEVIATIONS,
+        paper_value_words=paper_value_words,
+        reach_words=QUANTITIES,
         zmp_margin=_P.com.zmp_margin,
         lateral_floor=_P.pelvis.lateral_floor,
         step_width=_P.walk.step_width,

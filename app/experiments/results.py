@@ -2,7 +2,7 @@
 numbers from its topic module, the claims' verdicts, every run's summary, the run's
 :class:`Meta`); :func:`to_json` writes it (``dataclasses.asdict``, NaN / inf as null).
 
-A run's own results are in :mod:`app.experiments.runs`; each section's dataclasses in its
+A run's own results are in :mod:`app.experiments.outcomes`; each section's dataclasses in its
 topic module (:mod:`~app.experiments.limits`, :mod:`~app.experiments.waist`, ...).
 """
 
@@ -22,6 +22,7 @@ from app.experiments.energy import EnergySection
 from app.experiments.kappa import KappaSection
 from app.experiments.limits import EquivalentLengths, KinematicsSection, MaxStep
 from app.experiments.paper import numbers as paper_numbers
+from app.experiments.reach import ReachSection
 from app.experiments.robustness import RobustnessSection
 from app.experiments.sensitivity import SensitivitySection
 from app.experiments.waist import LateralSection, WaistSection
@@ -102,6 +103,7 @@ class StudyResults:
     robustness: RobustnessSection | None = None
     sensitivity: SensitivitySection | None = None
     ablation: AblationSection | None = None  # section 10: strategies beside the MPC
+    reach: ReachSection | None = None  # why a walk reaches farther than eq. (4)
     claims: list[ClaimResult] = field(default_factory=list)
     runs: dict[str, RunRecord] = field(default_factory=dict)
     figures: dict[str, str] = field(default_factory=dict)  # name -> file in figures/

@@ -37,7 +37,7 @@ import numpy as np
 
 from app.experiments.definitions import Falls, Pushes, Study
 from app.experiments.energy import SIGNIFICANCE
-from app.experiments.runs import Results, case_key, summary_of
+from app.experiments.outcomes import Results, case_key, summary_of
 from app.experiments.sensitivity import SensitivitySection, reads
 from controller.strategy import FIXED, MPC
 from pelvic_walk.core.metrics import LANDING_ERROR_CLEAN
@@ -92,6 +92,8 @@ class PushCell:
     runs: int
     support: str | None = None  # the foot it stood on when pushed
     overrides: list[list[Any]] = field(default_factory=list)  # parameters off their defaults
+    step: int = 2  # the pushed step (0-based)
+    phase: float = 0.5  # when in its single support (0: lift-off, 1: touch-down)
 
 
 @dataclass(frozen=True)
@@ -137,9 +139,16 @@ class RobustnessSection:
     falls: dict[str, dict[str, FallsCell]] = field(default_factory=dict)  # force_key -> method
     falls_setup: Falls | None = None
     trade: list[TradeRow] = field(default_factory=list)
+    # more push conditions for the stability claim: grid_key -> survival (Pushes.grid)
+    grid_pushes: dict[str, PushCell | None] = field(default_factory=dict)
 
     def push(self, method: str, x: float, direction: str) -> PushCell | None:
         return self.pushes.get(push_key(method, x, direction))
+
+    def grid_push(
+        self, method: str, x: float, direction: str, step: int, phase: float
+    ) -> PushCell | None:
+        return self.grid_pushes.get(grid_key(method, x, direction, step, phase))
 
     @property
     def push_lengths(self) -> list[float]:
@@ -152,6 +161,10 @@ class RobustnessSection:
 
 def push_key(method: str, x: float, direction: str) -> str:
     return f"{case_key(method, x)}@{direction}"
+
+
+def grid_key(method: str, x: float, direction: str, step: int, phase: float) -> str:
+    return f"{push_key(method, x, direction)}@step{step}@{phase:g}"
 
 
 def force_key(force: float) -> str:
@@ -245,8 +258,9 @@ def _push_words(p: PushCell | None) -> str:
 
 
 def push_order(a: PushCell | None, b: PushCell | None) -> int | None:
-    """-1 when ``a`` survives a push ``b`` topples at (their brackets do not overlap), +1 the
-    reverse, 0 when the brackets overlap; None when either is missing."""
+    """-1 when ``a`` survives a push ``b`` topples at with a gap between the brackets (the
+    difference is more than the bisection's resolution: adjacent brackets, e.g. 92-94 against
+    94-96 N, are within it and tie), +1 the reverse, 0 a tie; None when either is missing."""
     if a is None or b is None:
         return None
 
@@ -256,11 +270,19 @@ def push_order(a: PushCell | None, b: PushCell | None) -> int | None:
         return lo, hi
 
     (a_lo, a_hi), (b_lo, b_hi) = bracket(a), bracket(b)
-    if a_lo >= b_hi:
+    if a_lo > b_hi:
         return -1
-    if b_lo >= a_hi:
+    if b_lo > a_hi:
         return 1
     return 0
+
+
+def sign_p(wins: int, losses: int) -> float:
+    """Two-sided sign test that ``wins`` and ``losses`` (ties left out) are equally likely."""
+    from scipy import stats
+
+    n = wins + losses
+    return 1.0 if n == 0 else float(stats.binomtest(wins, n, 0.5).pvalue)
 
 
 def stability(rob: RobustnessSection, a: str, b: str) -> list[Comparison]:
@@ -274,6 +296,24 @@ def stability(rob: RobustnessSection, a: str, b: str) -> list[Comparison]:
             if order is not None:
                 out.append(
                     Comparison(f"push {d} at {x:.2f} m", _push_words(pa), _push_words(pb), order)
+                )
+    setup = rob.push_setup
+    for k, ph in setup.grid if setup else ():
+        for d in rob.directions:
+            assert setup is not None
+            x = setup.grid_length
+            pa, pb = rob.grid_push(a, x, d, k, ph), rob.grid_push(b, x, d, k, ph)
+            order = push_order(pa, pb)
+            if order is not None:
+                on = pa.support if pa and pa.support else "?"
+                out.append(
+                    Comparison(
+                        f"push {d} at {x:.2f} m, step {k + 1} (on the {on} foot), "
+                        f"{ph:.0%} into its single support",
+                        _push_words(pa),
+                        _push_words(pb),
+                        order,
+                    )
                 )
     for size, cells in rob.falls.items():
         ca, cb = cells.get(a), cells.get(b)
@@ -307,6 +347,8 @@ def push_job(
     f_high: float,
     overrides: tuple[Override, ...] = (),
     strategy_file: str | None = None,
+    step: int | None = None,
+    phase: float = 0.5,
 ) -> dict[str, Any]:
     """One method's push survival at one length and direction (a job of the run engine: plain
     data in and out), with ``overrides`` of any other parameter; ``strategy_file`` is a
@@ -318,7 +360,10 @@ def push_job(
     if strategy_file is not None:
         strategy.load_file(strategy_file)
 
+    from pelvic_walk.core.pushes import N_STEPS, PUSH_STEP
+
     params = RunSpec(method, step_length, 1, overrides=overrides).params() if overrides else None
+    k = PUSH_STEP if step is None else step
     s = largest_survived(
         method,
         step_length,
@@ -327,8 +372,15 @@ def push_job(
         f_high=f_high,
         resolution=resolution,
         params=params,
+        step=k,
+        n_steps=max(N_STEPS, k + 3),  # two steps after the pushed one
+        phase=phase,
     )
-    return dataclasses.asdict(s) | {"overrides": [list(o) for o in overrides]}
+    return dataclasses.asdict(s) | {
+        "overrides": [list(o) for o in overrides],
+        "step": k,
+        "phase": phase,
+    }
 
 
 def push_cell(outcome: dict[str, Any] | None) -> PushCell | None:
@@ -432,6 +484,7 @@ def robustness(
     pushes: dict[str, PushCell | None] | None = None,
     sens: SensitivitySection | None = None,
     cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] | None = None,
+    grid_pushes: dict[str, PushCell | None] | None = None,
 ) -> RobustnessSection:
     cells = repeats(study, results)
     # the paper's methods' (section 10's other strategies keep theirs in their rows)
@@ -446,4 +499,5 @@ def robustness(
         falls=falls(study, results, cells),
         falls_setup=study.falls,
         trade=trade(study, sens, pushes, cell_pushes or {}),
+        grid_pushes=dict(grid_pushes or {}),
     )

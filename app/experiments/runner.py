@@ -26,19 +26,21 @@ import time
 from datetime import UTC, datetime
 from pathlib import Path
 
-from app.experiments import sensitivity
+from app.experiments import limits, sensitivity
 from app.experiments.analysis import analyse
 from app.experiments.definitions import FULL, QUICK, Requests, Study, planned_runs, refinement_runs
+from app.experiments.outcomes import Results, case_key
+from app.experiments.reach import reach_cases, reach_job
 from app.experiments.results import Meta, StudyResults, to_json
 from app.experiments.robustness import (
     PushCell,
+    grid_key,
     push_cell,
     push_job,
     push_key,
     trade_cells,
     trade_jobs,
 )
-from app.experiments.runs import Results
 from app.experiments.worker import execute
 from controller import strategy
 from pelvic_walk.core.engine import Backend, OneJob, Task, make_backend, run_tasks
@@ -53,6 +55,36 @@ def _run_jobs(requests: Requests, study: Study) -> list[tuple[RunSpec, OneJob]]:
     return [
         (s, OneJob(execute, s, tuple(sorted(requests[s])), study.mid_step, label=s.key))
         for s in specs
+    ]
+
+
+def _grid_push_jobs(study: Study) -> list[tuple[str, OneJob]]:
+    """The stability claim's pushes at more phases of the step and on both feet
+    (:attr:`Pushes.grid`), for the paper's methods."""
+    p = study.pushes
+    if p is None:
+        return []
+    return [
+        (
+            grid_key(m, p.grid_length, d, k, ph),
+            OneJob(
+                push_job,
+                m,
+                p.grid_length,
+                d,
+                p.duration,
+                p.resolution,
+                p.f_high,
+                (),
+                None,
+                k,
+                ph,
+                label=f"push {m} {p.grid_length} {d} step {k} at {ph:g}",
+            ),
+        )
+        for m in study.methods
+        for k, ph in p.grid
+        for d in p.directions
     ]
 
 
@@ -98,6 +130,8 @@ class StudyRuns:
     cell_pushes: dict[tuple[str, tuple[Override, ...], str], PushCell | None] = dataclasses.field(
         default_factory=dict
     )
+    reach: dict[str, dict | None] = dataclasses.field(default_factory=dict)  # reach_job's
+    grid_pushes: dict[str, PushCell | None] = dataclasses.field(default_factory=dict)
 
 
 def run_study(study: Study, backend: Backend) -> StudyRuns:
@@ -108,8 +142,10 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
     table1 = {s for s in seeded if s.push_std is None}
     first = _run_jobs({s: e for s, e in requests.items() if s not in seeded}, study)
     pushes = _push_jobs(study)
+    grid = _grid_push_jobs(study)
     tasks: list[Task] = []
     tasks.extend(t for _, t in pushes)
+    tasks.extend(t for _, t in grid)
     tasks.extend(t for _, t in first)
     n = run_tasks(tasks, backend, desc=f"experiments ({study.name}, 1/3: {backend.name})")
     results: Results = {s: t.result for s, t in first}
@@ -143,7 +179,11 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
         for key, args in trade_jobs(study, trade_cells(study, sens)).items()
     }
     third = _run_jobs({s: requests[s] for s in seeded - table1}, study)
-    tasks = [*cell_jobs.values(), *(t for _, t in third)]
+    reach_jobs = {
+        case_key(m, x): OneJob(reach_job, m, x, label=f"reach {m} {x:g}")
+        for m, x in reach_cases(study, limits.max_step(study, results))
+    }
+    tasks = [*cell_jobs.values(), *reach_jobs.values(), *(t for _, t in third)]
     n += run_tasks(tasks, backend, desc=f"experiments ({study.name}, 3/3: {backend.name})")
     results.update({s: t.result for s, t in third})
     return StudyRuns(
@@ -153,6 +193,8 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
         n_jobs=n,
         seconds=time.perf_counter() - t0,
         cell_pushes={k: push_cell(t.result) for k, t in cell_jobs.items()},
+        reach={k: t.result for k, t in reach_jobs.items()},
+        grid_pushes={k: push_cell(t.result) for k, t in grid},
     )
 
 
@@ -208,7 +250,16 @@ def main(
         + (runs.sensitivity.duration_s if runs.sensitivity else 0.0),
         n_runs=len(runs.results)
         + (runs.sensitivity.n_runs if runs.sensitivity else 0)
-        + sum(p.runs for p in [*runs.pushes.values(), *runs.cell_pushes.values()] if p),
+        + sum(
+            p.runs
+            for p in [
+                *runs.pushes.values(),
+                *runs.cell_pushes.values(),
+                *runs.grid_pushes.values(),
+            ]
+            if p
+        )
+        + len(runs.reach),
         jobs=n_jobs,
         cpu_count=os.cpu_count(),
         machine=f"{platform.machine()}, {platform.python_implementation()} "
@@ -235,7 +286,16 @@ def finish(out: Path, study: Study, runs: StudyRuns, meta: Meta, t0: float) -> i
     from app.experiments import figures
     from pelvic_walk.core.report_dir import record_report_dir
 
-    data = analyse(study, runs.results, meta, runs.sensitivity, runs.pushes, runs.cell_pushes)
+    data = analyse(
+        study,
+        runs.results,
+        meta,
+        runs.sensitivity,
+        runs.pushes,
+        runs.cell_pushes,
+        runs.reach,
+        runs.grid_pushes,
+    )
     data = dataclasses.replace(
         data, figures=figures.make_all(study, runs.results, data, out / "figures")
     )

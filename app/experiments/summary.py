@@ -10,17 +10,24 @@ from :mod:`app.experiments.paper`, every measured one from the results.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any
+from typing import Any, cast
 
 import numpy as np
 
 from app.experiments import paper
-from app.experiments.ablation import buys
+from app.experiments.ablation import buys, push_n
 from app.experiments.definitions import AUTHORS, Study
+from app.experiments.energy import MIN_EFFECT_MEAN
+from app.experiments.outcomes import case_key, length_key
 from app.experiments.results import ClaimResult, StudyResults
-from app.experiments.robustness import PushCell, RobustnessSection, TradeRow, falls_p, stability
-from app.experiments.runs import case_key
-from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, NOT_MEASURED, PARTLY
+from app.experiments.robustness import (
+    PushCell,
+    RobustnessSection,
+    TradeRow,
+    falls_p,
+    stability,
+)
+from app.experiments.verdicts import DEPENDS, FAILS, HOLDS, INCONCLUSIVE, NOT_MEASURED, PARTLY
 from controller import strategy
 from controller.strategy import FIXED, MPC, REDUNDANCY
 from pelvic_walk.core.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
@@ -100,13 +107,144 @@ def _heavy_falls(rob: RobustnessSection) -> tuple[str, dict[str, Any]] | None:
     return (sizes[-1], rob.falls[sizes[-1]]) if sizes else None
 
 
+def _row(a: Any, m: str) -> Any:
+    return next((w for w in a.rows if w.method == m), None) if a else None
+
+
+def _push_pair(p: dict[str, PushCell | None], directions: list[str]) -> str:
+    vals = [_survived(p.get(d)) for d in directions]
+    return " / ".join("-" if v is None else f"{v:.0f}" for v in vals)
+
+
+def answer(study: Study, r: StudyResults) -> str | None:
+    """The first page's answer: does turning the pelvis lengthen the step (every method's
+    longest clean step side by side), does the MPC's plan add to it over the simpler ways to
+    turn, and what each costs (waist, push margin, energy), with the resolution of each."""
+    ms, a = r.max_step, r.ablation
+    f, m = ms[FIXED].longest_clean, ms[MPC].longest_clean
+    if f is None or m is None:
+        return None
+    res = study.sweep_resolution
+    methods = [FIXED, REDUNDANCY, MPC] + [w.method for w in (a.rows if a else [])]
+    methods = list(dict.fromkeys(x for x in methods if x in ms or _row(a, x)))
+
+    def limit(x: str) -> float | None:
+        return ms[x].longest_clean if x in ms else _row(a, x).longest_clean
+
+    def label(x: str) -> str:
+        w = _row(a, x)
+        return {FIXED: "pelvis held straight", REDUNDANCY: "redundancy", MPC: "MPC"}.get(
+            x, f"{w.label.lower()} (`{x}`)" if w else x
+        )
+
+    lims = {x: limit(x) for x in methods}
+    turning = [x for x in methods if x != FIXED and lims[x] is not None]
+    gains = [cast(float, lims[x]) - f for x in turning]
+    lengthens = bool(gains) and max(gains) > res / 2
+    text = (
+        "**The answer.** "
+        + (
+            "Turning the pelvis lengthens the longest step our robot walks without a fault"
+            + (", whichever way it is turned" if gains and min(gains) > res / 2 else "")
+            if lengthens
+            else "Turning the pelvis does not lengthen the longest step our robot walks "
+            "without a fault"
+        )
+        + ": "
+        + ", ".join(f"{label(x)} {_m(lims[x])} m" for x in methods)
+        + f" (each found on a {res:g} m grid, so +/- {res:g} m; the paper: "
+        + " / ".join(f"{paper.MAX_STEP[k]:.2f}" for k in (FIXED, REDUNDANCY, MPC))
+        + " m for the first three)."
+    )
+    if gains:
+        text += (
+            f" Rotation earns {min(gains):+.2f} to {max(gains):+.2f} m "
+            f"({100 * min(gains) / f:+.0f} to {100 * max(gains) / f:+.0f} %)"
+        )
+        if f > paper.MAX_STEP[FIXED] + 1e-9 and m - f < GAIN - 1e-9:
+            text += (
+                f"; the paper's +{GAIN:.2f} m is not reproduced because our fixed pelvis "
+                f"already walks {f:.2f} m (section 2 measures why)"
+            )
+        text += "."
+        others = [x for x in turning if x != MPC]
+        best_other = max((cast(float, lims[x]) for x in others), default=None)
+        if best_other is not None:
+            extra = m - best_other
+            text += (
+                f" The MPC's plan adds {extra:+.2f} m over the best of the simpler ways to turn"
+                + (" (within one step of the grid)" if abs(extra) <= res + 1e-9 else "")
+                + ": "
+                + ", ".join(f"{label(x)} {m - cast(float, lims[x]):+.2f} m" for x in others)
+                + "."
+            )
+            if lengthens and extra <= res + 1e-9:
+                text += (
+                    " So on this robot the rotation earns the longer step; the MPC's "
+                    f"prediction buys at most one grid step ({res:g} m) of it."
+                )
+        if _row(a, "sine"):
+            text += " The sine is essentially the prior art the paper cites (its ref. [2])."
+    if a is not None:
+        x = length_key(a.turn_length)
+        dirs = list(study.pushes.directions) if study.pushes else []
+        rows = [w for w in (_row(a, y) for y in methods) if w]
+        waist = ", ".join(f"{label(w.method)} {_m(w.waist_peak_deg.get(x), '.0f')}" for w in rows)
+        push = ", ".join(f"{label(w.method)} {_push_pair(w.pushes, dirs)}" for w in rows)
+        energy = ", ".join(
+            f"{label(w.method)} {_m(w.energy_substep.get(x), '.0f')} +/- "
+            f"{_m(w.energy_std_substep.get(x), '.0f')}"
+            for w in rows
+        )
+        text += (
+            f" **What each costs**, on the same unseeded walks: the waist's peak at "
+            f"{a.turn_length:.2f} m: {waist} deg; the largest sideways shove survived at "
+            f"{a.push_length:.2f} m ({' / '.join(dirs)}, each bracketed to "
+            f"{a.push_resolution:g} N, one push phase): {push} N; energy per two steps at "
+            f"{a.turn_length:.2f} m (1 ms, mean +/- std over one walk's windows): {energy} J."
+        )
+        fixed_row = _row(a, FIXED)
+        spread = []
+        for w in rows:
+            for d in dirs:
+                pw = push_n(w.pushes.get(d))
+                pf = push_n(fixed_row.pushes.get(d)) if fixed_row else None
+                if pw is not None and pf is not None:
+                    spread.append(abs(pw - pf))
+        if spread:
+            text += (
+                f" The shoves differ from the straight pelvis's by at most {max(spread):.0f} N "
+                "in this one phase of the step."
+            )
+    rob = r.robustness
+    heavy = _heavy_falls(rob) if rob else None
+    if heavy and MPC in heavy[1] and FIXED in heavy[1]:
+        by = heavy[1]
+        cm, cf = by[MPC], by[FIXED]
+        p = falls_p(cm, cf)
+        text += (
+            f" Under random shoves {heavy[0]} strong the MPC falls in {cm.fell} of {cm.runs} "
+            f"walks against {cf.fell} of {cf.runs} with the straight pelvis"
+            + (f" and {by[REDUNDANCY].fell} with redundancy" if REDUNDANCY in by else "")
+            + (f" (p = {p:.2g}: not a significant difference)" if p >= 0.05 else f" (p = {p:.2g})")
+            + "."
+        )
+    st = _claim(r, "stability")
+    if st and st.measured.get("reading_rows"):
+        text += (
+            f" Is the MPC's rotation 'more stable' than redundancy's (Sec. VII): {st.verdict}; "
+            + "; ".join(f"{k}: {says}" for k, says, _ in st.measured["reading_rows"])
+            + " (section 8)."
+        )
+    return text
+
+
 def plain(study: Study, r: StudyResults) -> str | None:
-    """The first paragraph: what the paper says and what we found, in plain words."""
+    """The first paragraph: what the paper says, our answer, and the tally."""
     ms = r.max_step
     f, m = ms[FIXED].longest_clean, ms[MPC].longest_clean
     if f is None or m is None:
         return None
-    pf, pm = paper.MAX_STEP[FIXED], paper.MAX_STEP[MPC]
     text = (
         "The paper proposes that a humanoid robot turn its pelvis (its hips, about the "
         "vertical) while it walks, planned a moment ahead by a model-predictive controller "
@@ -114,60 +252,33 @@ def plain(study: Study, r: StudyResults) -> str | None:
         "second or so and chooses the turn that fits them), so that each leg reaches "
         "further and the robot can take longer steps. It compares this with the pelvis held "
         "straight (*fixed*) and with the authors' earlier method, which turns the pelvis only "
-        "as far as the feet need at each instant (*redundancy*). On our simulated robot the "
-        f"longest step the MPC takes without a fault is {m:.2f} m against {f:.2f} m with the "
-        f"pelvis held straight ({100 * (m / f - 1):+.0f} %; the paper: {pm:.2f} against "
-        f"{pf:.2f} m, {100 * (pm / pf - 1):+.0f} %)."
+        "as far as the feet need at each instant (*redundancy*)."
     )
-    rob = r.robustness
-    if rob is not None and rob.pushes:
-        more, less, n = _push_tally(rob, FIXED)
-        if n:
-            x = rob.push_setup.trade_length if rob.push_setup else rob.push_lengths[0]
-            d = rob.directions[0]
-            mp, fp = _survived(rob.push(MPC, x, d)), _survived(rob.push(FIXED, x, d))
-            example = (
-                f" (the largest shove survived at {x:.2f} m, pushed to the {d}: {mp:.0f} N "
-                f"against {fp:.0f} N)"
-                if mp is not None and fp is not None
-                else ""
+    if r.ablation is not None and any(w.role != "paper" for w in r.ablation.rows):
+        text += (
+            " Beside them we run simpler ways to turn: "
+            + ", ".join(
+                f"{w.label.lower()} (`{w.method}`)" for w in r.ablation.rows if w.role != "paper"
             )
-            if less > more:
-                text += (
-                    " The turning pelvis has a price: shoved sideways, the MPC robot survives "
-                    f"only a smaller shove than the one with a straight pelvis in {less} of {n} "
-                    f"cases (three step lengths, two directions){example}"
-                )
-            else:
-                text += (
-                    " Shoved sideways, the MPC robot withstands at least the shoves the one "
-                    f"with a straight pelvis does in {n - less} of {n} cases{example}"
-                )
-            heavy = _heavy_falls(rob)
-            if heavy and MPC in heavy[1] and FIXED in heavy[1]:
-                cm, cf = heavy[1][MPC], heavy[1][FIXED]
-                p = falls_p(cm, cf)
-                text += (
-                    f", and under random shoves {heavy[0]} strong it falls in {cm.fell} of "
-                    f"{cm.runs} walks against {cf.fell} of {cf.runs}"
-                    + (
-                        f" (p = {p:.2g}: with {cm.runs} walks each, not a significant difference)"
-                        if p >= 0.05
-                        else f" (p = {p:.2g})"
-                    )
-                )
-            text += "."
-    count = {v: sum(c.verdict == v for c in r.tallied) for v in (HOLDS, PARTLY, FAILS, DEPENDS)}
-    text += (
-        f" Of the paper's {len(r.tallied)} claims we test, {count[HOLDS]} hold, {count[PARTLY]} "
-        f"hold in part and {count[FAILS]} do not"
-        + (
-            f"; {count[DEPENDS]} (about energy) "
-            + ("depends" if count[DEPENDS] == 1 else "depend")
-            + " on how often the energy is sampled"
-            if count[DEPENDS]
-            else ""
+            + " (section 10)."
         )
+    ans = answer(study, r)
+    if ans:
+        text += "\n\n" + ans
+    count = {
+        v: sum(c.verdict == v for c in r.tallied)
+        for v in (HOLDS, PARTLY, INCONCLUSIVE, FAILS, DEPENDS)
+    }
+    text += (
+        f"\n\nOf the paper's {len(r.tallied)} claims we test, {count[HOLDS]} hold, "
+        f"{count[PARTLY]} hold in part, "
+        + (
+            f"{count[INCONCLUSIVE]} are inconclusive (our evidence cannot tell) "
+            if count[INCONCLUSIVE]
+            else "none is inconclusive "
+        )
+        + f"and {count[FAILS]} do not hold"
+        + (f"; {count[DEPENDS]} depend on the reading" if count[DEPENDS] else "")
         + "."
     )
     if r.checks:
@@ -237,10 +348,17 @@ def _robustness(study: Study, r: StudyResults) -> str | None:
         off.append(f"{m} {sum(c.off_foothold for c in cells)}")
     worst = [c.worst_landing_cm for c in rob.cells.values() if c and c.worst_landing_cm]
     c = _claim(r, "stability")
-    text = (
-        "**Stability (Sec. VII, section 8): "
-        + (f"the MPC more stable than redundancy {c.verdict}.** " if c else "** ")
-        + f"Table 1's seeded repeats ({rob.repeats} per method and length, "
+    text = "**Stability (Sec. VII, section 8): " + (
+        f"the MPC more stable than redundancy: {c.verdict}.** " if c else "** "
+    )
+    if c and c.measured.get("reading_rows"):
+        text += (
+            "Reading by reading: "
+            + "; ".join(f"{k}: {says}" for k, says, _ in c.measured["reading_rows"])
+            + ". "
+        )
+    text += (
+        f"Table 1's seeded repeats ({rob.repeats} per method and length, "
         f"{rob.lengths[0]:.2f}-{rob.lengths[-1]:.2f} m, a {DISTURBANCE:g} N random push on the "
         f"torso throughout): runs that fell: {', '.join(parts)}; that did not fall but landed a "
         f"foot more than {LANDING_ERROR_CLEAN * 100:.0f} cm off: {', '.join(off)}"
@@ -260,7 +378,8 @@ def _robustness(study: Study, r: StudyResults) -> str | None:
             if n:
                 text += (
                     f" Largest sideways push survived, the MPC against {other}: more in {more}, "
-                    f"less in {less} of {n} (lengths and directions)."
+                    f"less in {less}, within the bisection's resolution in {n - more - less} of "
+                    f"{n} (lengths and directions)."
                 )
     return text
 
@@ -272,24 +391,21 @@ def _waist(study: Study, r: StudyResults) -> str | None:
     d = c.measured
     amp, why = _claim(r, "waist_amplitude"), _claim(r, "waist_from_prediction")
 
-    def when(lead: float) -> str:
-        if abs(lead) < 0.005 + 1e-9:
-            return "at the lift-off"
-        return f"{abs(lead):.2f} s {'before' if lead > 0 else 'after'} the lift-off"
-
     text = (
-        f"**Waist (Fig. 8-9): the early turn {c.verdict}.** The MPC's turn toward the coming "
-        f"swing starts {when(d['mpc_lead'])}, redundancy's {when(d['red_lead'])} (rate at "
-        f"lift-off {d['mpc_rate']:+.0f} vs {d['red_rate']:+.0f} deg/s toward the swing). "
-        f"Its size before the lift-off: {d['mpc_early']:.1f} % of the waist's range, "
+        f"**Waist (Fig. 8-9): the early turn {c.verdict}.** Before the lift-off the MPC's waist "
+        f"turns {d['mpc_early']:.1f} % of its range toward the coming swing, "
         f"{d['mpc_of_sine_percent']:.0f} % of what a sine over the step moves "
-        f"({d['sine']:.1f} %); redundancy's {d['red_early']:.1f} %."
+        f"({d['sine']:.1f} %; the rule's bar is 50 %), its rate at lift-off "
+        f"{d['mpc_rate']:+.0f} deg/s toward the swing; redundancy's {d['red_early']:.1f} % "
+        f"({d['red_rate']:+.0f} deg/s)."
     )
     if why and why.measured:
         w = why.measured
         text += (
-            f" Does it come from the prediction: {why.verdict} (with the reference from the "
-            f"state now, no prediction: {w['abl_early']:+.1f} % of the range)."
+            f" Does it come from the prediction: {why.verdict}. The prediction is necessary "
+            f"(with the reference from the state now: {w['abl_early']:+.1f} % of the range) "
+            f"but not sufficient (with the prediction and the other readings of eq. (31)-(32)'s "
+            f"lateral distance: {w['others']})."
         )
     if amp and amp.measured:
         text += (
@@ -305,7 +421,10 @@ def _energy(study: Study, r: StudyResults) -> str | None:
     claims = [c for cid in ENERGY_CLAIMS if (c := _claim(r, cid)) and c.verdict != NOT_MEASURED]
     if not claims:
         return None
-    counts = {v: sum(c.verdict == v for c in claims) for v in (HOLDS, PARTLY, FAILS, DEPENDS)}
+    counts = {
+        v: sum(c.verdict == v for c in claims)
+        for v in (HOLDS, PARTLY, INCONCLUSIVE, FAILS, DEPENDS)
+    }
     ties = sum(c.measured.get("ties", 0) for c in claims)
     comparisons = sum(c.measured.get("n", 0) for c in claims if "ties" in c.measured)
     depends = [
@@ -313,11 +432,13 @@ def _energy(study: Study, r: StudyResults) -> str | None:
         for c in claims
         if c.verdict == DEPENDS
     ]
-    means = [c.mean for row in r.energy.table.values() for c in row.values() if c.mean]
+    e1 = r.energy.at_substep()  # the reading the claims use
+    means = [c.mean for row in e1.table.values() for c in row.values() if c.mean]
     theirs = [c.mean for row in paper.TABLE1.values() for c in row.values() if c]
     text = (
-        f"**Energy (Table 1):** of {len(claims)} energy claims {counts[HOLDS]} hold, "
-        f"{counts[PARTLY]} partly, {counts[FAILS]} do not"
+        f"**Energy (Table 1, judged at 1 ms):** of {len(claims)} energy claims "
+        f"{counts[HOLDS]} hold, {counts[PARTLY]} partly, {counts[INCONCLUSIVE]} inconclusive, "
+        f"{counts[FAILS]} do not"
         + (
             f", {counts[DEPENDS]} "
             + ("depends" if counts[DEPENDS] == 1 else "depend")
@@ -325,20 +446,35 @@ def _energy(study: Study, r: StudyResults) -> str | None:
             if counts[DEPENDS]
             else ""
         )
-        + f". {ties} of {comparisons} orderings are ties: our methods' means differ by less "
-        "than the repeats' spread, most at the short lengths"
+        + f". {ties} of {comparisons} orderings are ties: the repeats do not separate the "
+        f"means, or they differ by less than {100 * MIN_EFFECT_MEAN:.0f} % (the smallest "
+        "difference that counts)"
     )
     if means:
         text += (
-            f"; our windows cost {min(means):.0f}-{max(means):.0f} J (the paper's "
+            f"; our windows cost {min(means):.0f}-{max(means):.0f} J at 1 ms (the paper's "
             f"{min(theirs):.0f}-{max(theirs):.0f} J)"
         )
+    differ = [
+        f"{ENERGY_CLAIMS[c.id]} ({c.verdict}; "
+        + ", ".join(f"{v} at {k}" for k, v in c.variants.items() if k != c.reading)
+        + ")"
+        for c in claims
+        if any(v != c.verdict for v in c.variants.values())
+    ]
     text += (
         ". Depending on whether the energy is sampled at 200 Hz or every 1 ms: "
         + "; ".join(depends)
         + " (section 5 says why)."
         if depends
-        else ". The verdicts are the same on the energy at 200 Hz and at 1 ms."
+        else ""
+    )
+    text += (
+        ". The 200 Hz reading (aliased, not used for the verdicts) would say otherwise for: "
+        + "; ".join(differ)
+        + "."
+        if differ
+        else ". The 200 Hz reading gives the same verdicts."
     )
     return text
 
@@ -404,13 +540,14 @@ def _verdicts(study: Study, r: StudyResults) -> str | None:
         return None
     count = {
         v: sum(c.verdict == v for c in tallied)
-        for v in (HOLDS, PARTLY, FAILS, DEPENDS, NOT_MEASURED)
+        for v in (HOLDS, PARTLY, INCONCLUSIVE, FAILS, DEPENDS, NOT_MEASURED)
     }
     fails = [c.claim for c in tallied if c.verdict == FAILS]
+    unsure = [c.claim for c in tallied if c.verdict == INCONCLUSIVE]
     depends = [c.claim for c in tallied if c.verdict == DEPENDS]
     text = (
         f"**All {len(tallied)} claims:** {count[HOLDS]} hold, {count[PARTLY]} partly, "
-        f"{count[FAILS]} do not hold"
+        f"{count[INCONCLUSIVE]} inconclusive, {count[FAILS]} do not hold"
         + (
             f", {count[DEPENDS]} "
             + ("depends" if count[DEPENDS] == 1 else "depend")
@@ -423,6 +560,8 @@ def _verdicts(study: Study, r: StudyResults) -> str | None:
     )
     if fails:
         text += " Not holding: " + "; ".join(fails) + "."
+    if unsure:
+        text += " Inconclusive (our evidence cannot tell): " + "; ".join(unsure) + "."
     if depends:
         text += " Depending on the reading: " + "; ".join(depends) + "."
     if r.checks:

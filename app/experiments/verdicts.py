@@ -6,7 +6,8 @@ measured; a claim whose numbers are missing is "not measured". A bound on NaN or
 A :class:`Claim` ties a claim of the paper to its measurement and rule (the table of them is
 :data:`app.experiments.claims.CLAIMS`). A claim judged on other readings of the same numbers
 (its ``variants``, e.g. the energy at 1 ms) holds, partly holds or does not only where every
-reading agrees; otherwise its verdict is :data:`DEPENDS`, with each reading's verdict. A
+reading agrees; otherwise its verdict is :data:`DEPENDS`, with each reading's verdict (unless
+the main reading is ``primary``: the others are then reported beside it and do not decide). A
 *consistency check* (``check``: why) is judged the same way but is not a result: its inputs
 were chosen to match the paper, or it follows from another rule; it is listed apart and not
 counted.
@@ -26,8 +27,9 @@ from app.experiments.results import ClaimResult, StudyResults
 Measure = Callable[[Study, StudyResults], dict[str, Any] | None]
 
 HOLDS, PARTLY, FAILS, NOT_MEASURED = "holds", "partly", "does not hold", "not measured"
+INCONCLUSIVE = "inconclusive"  # the evidence cannot tell (within resolution, not significant)
 DEPENDS = "depends on the reading"  # the readings of the same numbers disagree
-VERDICTS = (HOLDS, PARTLY, FAILS, DEPENDS, NOT_MEASURED)
+VERDICTS = (HOLDS, PARTLY, INCONCLUSIVE, FAILS, DEPENDS, NOT_MEASURED)
 _OPS = {
     ">": operator.gt,
     ">=": operator.ge,
@@ -66,14 +68,18 @@ class Bound:
 @dataclass(frozen=True)
 class Rule:
     """Holds when every ``holds`` bound is met (any one with ``any_holds``); else partly when
-    every ``partly`` bound is met (never without partly bounds); else does not hold."""
+    every ``partly`` bound is met (never without partly bounds); else *inconclusive* when every
+    ``inconclusive`` bound is met (the evidence cannot tell: its differences are within the
+    measurement's resolution or not significant; never without such bounds); else does not
+    hold."""
 
     holds: tuple[Bound, ...]
     partly: tuple[Bound, ...] = ()
     any_holds: bool = False
+    inconclusive: tuple[Bound, ...] = ()
 
     def measures(self) -> set[str]:
-        return {b.measure for b in self.holds + self.partly}
+        return {b.measure for b in self.holds + self.partly + self.inconclusive}
 
     def words(self, names: Mapping[str, str]) -> str:
         joint = " or " if self.any_holds else " and "
@@ -82,6 +88,10 @@ class Rule:
             named = {b.measure for b in self.holds} if len(self.holds) == 1 else set()
             partly = (b.words(names, short=b.measure in named) for b in self.partly)
             text += "; partly if " + " and ".join(partly)
+        if self.inconclusive:
+            text += "; else inconclusive if " + " and ".join(
+                b.words(names) for b in self.inconclusive
+            )
         return text
 
 
@@ -94,6 +104,8 @@ def verdict(measured: Mapping[str, Any] | None, rule: Rule) -> str:
         return HOLDS
     if rule.partly and all(b.met(measured) for b in rule.partly):
         return PARTLY
+    if rule.inconclusive and all(b.met(measured) for b in rule.inconclusive):
+        return INCONCLUSIVE
     return FAILS
 
 
@@ -140,6 +152,9 @@ class Claim:
     variants: Mapping[str, Measure] = field(default_factory=dict)
     reading: str = ""  # the main reading's name, when there are variants (e.g. "200 Hz")
     why_readings: str = ""  # why the readings can disagree (said when they do)
+    # the main reading decides alone (the others are reported, e.g. the energy at 200 Hz,
+    # which aliases, beside the 1 ms reading)
+    primary: bool = False
     check: str = ""  # not empty: a consistency check, not a result; why
 
     def judge(self, study: Study, r: StudyResults) -> ClaimResult:
@@ -154,7 +169,7 @@ class Claim:
             readings[name] = self.ours.format(**other) if other is not None else "-"
         if v != NOT_MEASURED and any(x != v for x in variants.values()):
             variants = {self.reading or "main": v, **variants}
-            v = DEPENDS
+            v = v if self.primary else DEPENDS
         return ClaimResult(
             self.id,
             self.section,
@@ -167,6 +182,6 @@ class Claim:
             variants,
             readings=readings,
             reading=self.reading,
-            why=self.why_readings if v == DEPENDS else "",
+            why=self.why_readings if v == DEPENDS or (self.primary and len(variants) > 1) else "",
             check=self.check,
         )

@@ -40,7 +40,7 @@ from typing import Any
 import numpy as np
 
 from app.experiments.definitions import LATERAL, ROTATING, Study
-from app.experiments.runs import Results, StepExtract, array, case_key, step_of, summary_of
+from app.experiments.outcomes import Results, StepExtract, array, case_key, step_of, summary_of
 from controller.params import CONTROL_DT, LATERAL_MODES, ControllerParams
 from controller.strategy import MPC
 from pelvic_walk.core.measure import walks

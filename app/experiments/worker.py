@@ -18,7 +18,7 @@ from typing import Any
 import numpy as np
 
 from app.experiments.balance import EDGE_MARGIN, EDGES
-from app.experiments.runs import (
+from app.experiments.outcomes import (
     Extracts,
     RunResult,
     RunSummary,

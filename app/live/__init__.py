@@ -6,12 +6,14 @@
 - the immutable :class:`LiveFrame` / :class:`RobotFrame` the displays draw are the core's
   (``pelvic_walk.core.frames``: plain data a headless run captures too);
 - ``history``: plot rows and kept frames, bounded (pause, scrub, record);
-- ``session``: :class:`LiveSim`, a session run by a thread, with the waits the API needs.
+- ``session``: :class:`SessionView`, a session's display side, with the waits the API needs;
+- ``pool``: :class:`WorkerPool`, the one live mode: the robots run in workers (processes, or
+  threads of this process: ``engines``), one part per robot, their frames merged.
 """
 
 from app.live.intent import SPEED_MAX, SPEED_MIN, Intent, check_methods
 from app.live.loop import LIVE_STEPS, live_params
-from app.live.session import FALL_HOLD_S, LiveSim, Playback
+from app.live.session import FALL_HOLD_S, Playback, SessionView
 from pelvic_walk.core.frames import Horizon, LiveFrame, RobotFrame
 
 __all__ = [
@@ -22,9 +24,9 @@ __all__ = [
     "Horizon",
     "Intent",
     "LiveFrame",
-    "LiveSim",
     "Playback",
     "RobotFrame",
+    "SessionView",
     "check_methods",
     "live_params",
 ]

@@ -5,8 +5,9 @@ example): one owner of the simulation.
 :class:`LiveLoop` holds one :class:`~pelvic_walk.core.session.Session` per selected method (same
 parameters, the method differs) and knows nothing of displays or the web: it reads the
 latest :class:`~app.live.intent.Intent` from a callable and hands each
-:class:`~pelvic_walk.core.frames.LiveFrame` to a callable. It runs in a thread of the web process
-(:class:`app.live.session.LiveSim`) or in a worker process; either way one iteration is:
+:class:`~pelvic_walk.core.frames.LiveFrame` to a callable. It runs in a thread of a worker
+of the pool (:mod:`app.live.pool`: a process, or a thread of the web process); one
+iteration is:
 
 1. apply new intent (rebuild the robots on a reset or a change of methods, hand new
    parameters to every walker, re-anchor the clock on pause / speed changes, pushes);

@@ -1,12 +1,15 @@
-"""Worker processes for the live sessions, seen from the web process.
+"""The one live mode: workers for the live sessions, seen from the web process.
 
 The web process keeps the viser broadcast, FastAPI and the display thread; the robots run in
-``n_workers`` worker processes (``app.live.worker``), so they keep real time whatever the
-number of viewers, as long as their worker has the compute. Each robot of a session runs in
-a *part* (a :class:`~app.live.loop.LiveLoop` with that one robot) placed on the worker with
-the most free robot slots (``robots_per_worker`` each), so one session's robots use every
-core. The parts share the session's time base (the intent's anchor) and rebuild together, so
-the robots stay in step; :class:`RemoteSession` merges their frames into one.
+``n_workers`` workers (``app.live.worker``), by default processes, so they keep real time
+whatever the number of viewers, as long as their worker has the compute. How a worker is started
+and reached is the pool's *engine* (``app.live.engines``): processes over pipes (the product's),
+or threads of this process over queues (``serve --workers 0``, the tests); the placement, the
+parts, the merge and the restarts below are the same on both. Each robot of a session runs in a
+*part* (a :class:`~app.live.loop.LiveLoop` with that one robot) placed on the worker with the
+most free robot slots (``robots_per_worker`` each), so one session's robots use every core. The
+parts share the session's time base (the intent's anchor) and rebuild together, so the robots
+stay in step; :class:`RemoteSession` merges their frames into one.
 
 :meth:`WorkerPool.open` raises :class:`PoolFull` when the robots would not fit (admission
 control). A receiver thread per worker reads the frames; when a worker dies (its pipe
@@ -19,21 +22,20 @@ from __future__ import annotations
 import collections
 import dataclasses
 import logging
-import multiprocessing
-import os
 import pickle
 import threading
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import cast
+from typing import Any, cast
 
 import numpy as np
 
+from app.live.engines import START_DELAY_S, Engine, InProcessEngine, ProcessEngine, WorkerHandle
 from app.live.intent import Intent, check_methods
 from app.live.loop import PUBLISH_HZ
 from app.live.session import KEEP_S, SessionView
-from app.live.worker import FrameCodec, worker_main
+from app.live.worker import FrameCodec
 from controller import strategy
 from pelvic_walk.core.frames import LiveFrame
 
@@ -41,7 +43,7 @@ ALIGN_S = 3.0  # [s] of each part's frames kept to show all robots at one instan
 
 log = logging.getLogger(__name__)
 START_TIMEOUT_S = 60.0  # a new worker imports numpy, MuJoCo and Pinocchio first
-START_DELAY_S = 1.0  # [s] rebuilt robots start this much later: parts build in parallel
+__all__ = ["START_DELAY_S", "InProcessEngine", "PoolFull", "RemoteSession", "WorkerPool"]
 
 
 class PoolFull(RuntimeError):
@@ -79,7 +81,7 @@ class RemoteSession(SessionView):
         keep_s: float = KEEP_S,
         label: str | None = None,
     ):
-        super().__init__(intent, keep_s, start_delay=START_DELAY_S)
+        super().__init__(intent, keep_s, wall=pool.clock, start_delay=pool.start_delay)
         self.sid = sid
         self.label = label or f"session {sid}"  # in logs (a private session: not its id)
         self.pool = pool
@@ -131,6 +133,17 @@ class RemoteSession(SessionView):
     def worker_pids(self) -> list[int]:
         return sorted({cast(int, w.process.pid) for w in self.parts.values()})  # started in _spawn
 
+    def loops(self) -> dict[str, Any]:
+        """Each robot's :class:`~app.live.loop.LiveLoop`, where the engine can reach it (the
+        in-process one; tests read them). TypeError on worker processes."""
+        return {m: self.pool.engine.loop(w.process, self.part_id(m)) for m, w in self.parts.items()}
+
+    @property
+    def robots(self) -> dict[str, Any]:
+        """The robots of an in-process engine's parts, by method (the loops' threads own
+        them; tests may read)."""
+        return {m: loop.robots[m] for m, loop in self.loops().items() if m in loop.robots}
+
     def close(self) -> None:
         self.pool.close(self)
 
@@ -146,7 +159,8 @@ class RemoteSession(SessionView):
             for m, rows in frame.rows.items():
                 self._rows.setdefault(m, []).append(rows)
             self._restarted |= frame.restarted
-            order = [m for m in self.intent.methods if m in self._recent and m in self.parts]
+            methods = self.intent.methods
+            order = [m for m in methods if m in self._recent and m in self.parts]
             if not order or (method != order[0] and not frame.paused):
                 return  # merge on the lead part's frames (and every frame while paused)
             latest = [self._recent[m][-1] for m in order]
@@ -168,7 +182,11 @@ class RemoteSession(SessionView):
                 paused=paused,
                 realtime_factor=None if None in rtf else min(rtf),  # type: ignore[type-var]
                 compute_realtime_factor=None if None in crtf else min(crtf),  # type: ignore
-                intent_version=min(p.intent_version for p in parts),  # what is shown
+                # what is shown; none yet while a robot asked for has sent no frame (a
+                # change of robots is carried out once every new robot is shown)
+                intent_version=(
+                    min(p.intent_version for p in parts) if len(order) == len(methods) else -1
+                ),
                 steps_done=min(p.steps_done for p in parts),
                 pushes_done=min(p.pushes_done for p in parts),
                 robots=tuple(
@@ -195,7 +213,7 @@ def _at(recent: collections.deque[LiveFrame], instant: float) -> LiveFrame:
 @dataclass
 class _Worker:
     index: int
-    process: multiprocessing.process.BaseProcess
+    process: WorkerHandle  # a process, or a thread of this one (the engine's)
     commands: object  # Connection (web -> worker)
     frames: object  # Connection (worker -> web)
     parts: dict[str, tuple[RemoteSession, str]] = field(default_factory=dict)  # id -> (s, m)
@@ -218,20 +236,43 @@ class _Worker:
 
 
 class WorkerPool:
-    """``n_workers`` processes running the robots of live sessions (module docstring)."""
+    """``n_workers`` workers running the robots of live sessions (module docstring).
 
-    def __init__(self, n_workers: int, robots_per_worker: int = 3, publish_hz: float = PUBLISH_HZ):
+    ``engine``: how workers are started and reached (default: :class:`ProcessEngine`,
+    processes; :class:`InProcessEngine`: threads of this process)."""
+
+    def __init__(
+        self,
+        n_workers: int,
+        robots_per_worker: int = 3,
+        publish_hz: float = PUBLISH_HZ,
+        engine: Engine | None = None,
+    ):
         if n_workers < 1 or robots_per_worker < 1:
             raise ValueError("need at least one worker and one robot per worker")
         self.n_workers = n_workers
         self.robots_per_worker = robots_per_worker
         self.publish_hz = publish_hz
-        self._ctx = multiprocessing.get_context("spawn")
+        self.engine: Engine = engine or ProcessEngine()
         self._lock = threading.RLock()
         self._workers: list[_Worker] = []
         self.sessions: dict[str, RemoteSession] = {}
         self.deaths: list[WorkerDeath] = []
         self._stopped = False
+
+    @property
+    def clock(self):
+        """The wall clock of the sessions' time base (the engine's)."""
+        return self.engine.clock
+
+    @property
+    def start_delay(self) -> float:
+        """[s of wall time] rebuilt robots start this much later (the engine's)."""
+        return self.engine.start_delay
+
+    @property
+    def in_process(self) -> bool:
+        return not isinstance(self.engine, ProcessEngine)
 
     # -- workers ---------------------------------------------------------------------------
     def start(self) -> WorkerPool:
@@ -242,28 +283,9 @@ class WorkerPool:
         return self
 
     def _spawn(self, index: int) -> _Worker:
-        cmd_recv, cmd_send = self._ctx.Pipe(duplex=False)
-        frm_recv, frm_send = self._ctx.Pipe(duplex=False)
-        # One BLAS thread per worker: the matrices are small and the cores are for workers.
-        env = {k: os.environ.get(k) for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
-        os.environ.update(OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1")
-        try:
-            proc = self._ctx.Process(
-                target=worker_main,
-                # a user's strategies (serve --strategy): the worker loads the same files
-                args=(cmd_recv, frm_send, self.publish_hz, strategy.user_sources()),
-                name=f"pelvic-walk-worker-{index}",
-                daemon=True,
-            )
-            proc.start()
-        finally:
-            for k, v in env.items():
-                if v is None:
-                    os.environ.pop(k, None)
-                else:
-                    os.environ[k] = v
-        cmd_recv.close()
-        frm_send.close()
+        proc, cmd_send, frm_recv = self.engine.start(
+            index, self.publish_hz, strategy.user_sources()
+        )
         w = _Worker(index, proc, cmd_send, frm_recv)
         w.receiver = threading.Thread(
             target=self._receive, args=(w,), name=f"worker-{index}-frames", daemon=True

@@ -23,8 +23,9 @@ A private session ends: a page's ``linger_s`` after its last view closed and its
 (a reload or a reconnect within that time gets it back); a scene's when its connection closes;
 an API-opened one after ``idle_s`` without calls.
 
-Sessions run in worker processes (:class:`~app.live.pool.WorkerPool`) or, with no pool, the
-shared one in a thread of this process (:class:`~app.live.session.LiveSim`).
+Sessions run in the worker pool (:class:`~app.live.pool.WorkerPool`, the one live mode); a
+registry started without one runs its own, in threads of this process (its in-process
+engine), and stops it with the sessions.
 """
 
 from __future__ import annotations
@@ -39,9 +40,10 @@ import time
 from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 
+from app.live.engines import InProcessEngine
 from app.live.intent import Intent
-from app.live.pool import PoolFull, WorkerPool
-from app.live.session import LiveSim, SessionView
+from app.live.pool import PoolFull, RemoteSession, WorkerPool
+from app.live.session import SessionView
 
 SHARED = "shared"
 MODES = ("shared", "private")
@@ -131,7 +133,7 @@ class SessionRegistry:
         if mode not in MODES:
             raise ValueError(f"sessions mode must be one of {', '.join(MODES)}, got {mode!r}")
         if mode == "private" and pool is None:
-            raise ValueError("private sessions need worker processes (--workers >= 1)")
+            raise ValueError("private sessions need a worker pool")
         if shared is None and mode != "private":
             raise ValueError("only private mode runs without a shared demo")
         first = initial or intent or (shared.intent if shared is not None else None)
@@ -148,6 +150,7 @@ class SessionRegistry:
         self._entries: dict[str, _Entry] = {}
         if shared is not None:
             self._entries[SHARED] = _Entry(shared, "shared", None, None, time.monotonic())
+        self._own_pool: WorkerPool | None = None  # started by start(), stopped by shutdown()
         self._stop = threading.Event()
         self._reaper = threading.Thread(target=self._reap, name="session-reaper", daemon=True)
         self._reaper.start()
@@ -162,16 +165,16 @@ class SessionRegistry:
         shared_demo: bool = True,
         per_address: int = PER_ADDRESS,
     ) -> SessionRegistry:
-        """Start the shared session (in a worker, or a thread without a pool; none when
-        ``shared_demo`` is False, private mode only) and the registry."""
-        shared: SessionView | None
-        if not shared_demo:
-            shared = None
-        elif pool is None:
-            shared = LiveSim(intent.params, intent.methods, intent.speed).start()
-        else:
-            shared = pool.open(intent, sid=SHARED)
-        return cls(mode, shared, pool, idle_s, intent, per_address=per_address)
+        """Start the shared session in the pool (none when ``shared_demo`` is False, private
+        mode only) and the registry. Without a pool, one of the demo's size runs in threads
+        of this process (the registry stops it)."""
+        own = None
+        if pool is None:
+            own = pool = WorkerPool(1, len(intent.methods), engine=InProcessEngine()).start()
+        shared = pool.open(intent, sid=SHARED) if shared_demo else None
+        registry = cls(mode, shared, pool, idle_s, intent, per_address=per_address)
+        registry._own_pool = own
+        return registry
 
     @classmethod
     def around(cls, session: SessionView) -> SessionRegistry:
@@ -395,13 +398,12 @@ class SessionRegistry:
             sids = [s for s in self._entries if s != SHARED]
         for sid in sids:
             self.close(sid)
-        if not stop_shared or not self.has_shared:
-            return
-        shared = self.shared
-        if isinstance(shared, LiveSim):
-            shared.stop()
-        elif self.pool is not None:
-            self.pool.close(shared)  # type: ignore[arg-type]
+        if stop_shared and self.has_shared:
+            shared = self.shared
+            if isinstance(shared, RemoteSession):
+                shared.pool.close(shared)
+        if self._own_pool is not None:
+            self._own_pool.stop()
 
 
 __all__ = [

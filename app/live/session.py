@@ -1,14 +1,14 @@
 """A live session as its users see it: intent in, frames out, the past kept for scrubbing.
 
-:class:`LiveSim` runs a :class:`~app.live.loop.LiveLoop` in a thread of this process and
-keeps, on the display side, the latest frame, the plot rows (:class:`PlotHistory`) and the
-last seconds of frames (:class:`FrameStore`). Callers (web handlers, GUI callbacks, tests)
-only write intent through its methods, each of which returns the new
-:class:`~app.live.intent.Intent`: a ticket that :meth:`LiveSim.wait_applied` waits on (the
-loop reports in every frame which intent it has read, how many single steps and which pushes
-it has carried out).
+:class:`SessionView` is the display side of a session whose loops run in the worker pool
+(:class:`~app.live.pool.RemoteSession`, the one live mode): it keeps the latest frame, the
+plot rows (:class:`PlotHistory`) and the last seconds of frames (:class:`FrameStore`).
+Callers (web handlers, GUI callbacks, tests) only write intent through its methods, each of
+which returns the new :class:`~app.live.intent.Intent`: a ticket that
+:meth:`SessionView.wait_applied` waits on (the loops report in every frame which intent they
+have read, how many single steps and which pushes they have carried out).
 
-While paused, :meth:`LiveSim.seek` shows a kept instant: :meth:`LiveSim.shown_frame` is then
+While paused, :meth:`SessionView.seek` shows a kept instant: :meth:`SessionView.shown_frame` is then
 the kept frame nearest to it (scene, horizon inspector, plot cursor); resuming returns to the
 present. :meth:`SessionView.playback` is the one account of the playback state (paused, speed,
 the instant shown, the timeline's range) that the panel, ``GET /api/state`` and
@@ -42,7 +42,7 @@ from app.live.intent import (
     check_push,
     check_speed,
 )
-from app.live.loop import PUBLISH_HZ, LiveLoop, live_params
+from app.live.loop import live_params
 from controller.params import ControllerParams
 from pelvic_walk.core.frames import LiveFrame
 
@@ -397,86 +397,3 @@ class SessionView:
                     else {}
                 )
             )
-
-
-class LiveSim(SessionView):
-    """One live session run by a thread of this process.
-
-    Args:
-        params: the initial parameters (default: :func:`~app.live.loop.live_params`).
-        methods: the robots to show, one per method.
-        speed: playback speed (x real time).
-        clock, sleep: the wall clock and the pacing sleep (tests may pass a no-op sleep to
-            run unpaced; the controller and simulation are always real).
-        keep_s: seconds of frames kept for scrubbing; publish_hz: frames per wall second.
-    """
-
-    def __init__(
-        self,
-        params: ControllerParams | None = None,
-        methods: Sequence[str] = DEFAULT_METHODS,
-        speed: float = 1.0,
-        clock: Callable[[], float] = time.monotonic,
-        sleep: Callable[[float], None] | None = None,
-        keep_s: float = KEEP_S,
-        publish_hz: float = PUBLISH_HZ,
-    ):
-        self._wake = threading.Event()  # set on every intent change (cuts a pacing sleep)
-        # a paced loop runs up to one display interval (plus a tick) ahead of the time base:
-        # robots (re)built start two intervals from now, so the loop is not already past it
-        super().__init__(
-            initial_intent(params, methods, speed), keep_s, wall=clock, start_delay=2 / publish_hz
-        )
-        self._thread: threading.Thread | None = None
-        self.loop = LiveLoop(
-            self._box.get,
-            self.receive,
-            clock=clock,
-            sleep=sleep or self._pause_for,
-            idle=self._pause_for,
-            publish_hz=publish_hz,
-        )
-
-    def _intent_changed(self) -> None:
-        self._wake.set()
-
-    def start(self) -> LiveSim:
-        if self._thread is None:
-            self._closed.clear()
-            self._thread = threading.Thread(target=self._run, name="live-sim", daemon=True)
-            self._thread.start()
-        return self
-
-    def stop(self, timeout: float = 5.0) -> None:
-        self._closed.set()
-        self._wake.set()
-        if self._thread is not None:
-            self._thread.join(timeout)
-            self._thread = None
-        with self._changed:
-            self._changed.notify_all()
-
-    @property
-    def running(self) -> bool:
-        return self._thread is not None and self._thread.is_alive()
-
-    @property
-    def robots(self):
-        """The loop's robots (tests may read; the loop thread owns them)."""
-        return self.loop.robots
-
-    def _pause_for(self, seconds: float) -> None:
-        """The pacing sleep: returns early when the intent changes or the session stops."""
-        self._wake.wait(seconds)
-        self._wake.clear()
-
-    def _run(self) -> None:
-        try:
-            while not self._closed.is_set():
-                self.loop.iterate()
-        except Exception as exc:  # noqa: BLE001 - keep the web server up; report the cause
-            log.exception("live simulation stopped")
-            self.error = f"{type(exc).__name__}: {exc}"
-        finally:
-            with self._changed:
-                self._changed.notify_all()

@@ -1,12 +1,15 @@
-"""A worker process: it runs live sessions and sends their frames to the web process.
+"""A worker: it runs live sessions and sends their frames to the web process.
 
-The web process (``app.live.pool``) starts workers with ``spawn`` and talks to each over two
-pipes: commands in (open a part of a session with its first intent, a new intent, close,
-stop) and frames out. Each part runs its :class:`~app.live.loop.LiveLoop` in a thread of the
-worker, paced to the session's time base; the worker holds no display or web object.
+The web process (``app.live.pool``) starts workers through its engine (``app.live.engines``: a
+process started with ``spawn``, or a thread of the web process) and talks to each over two pipes
+(or queues standing in for them): commands in (open a part of a session with its first intent, a
+new intent, close, stop) and frames out. Each part runs its :class:`~app.live.loop.LiveLoop` in
+a thread of the worker, paced to the session's time base; the worker holds no display or web
+object.
 
 Frames cross as one pickled message each (a few kB: plain arrays), sent by a thread of their
-own (:class:`Outbox`) so that a busy web process never slows the simulation. A robot's
+own (:class:`Outbox`) so that a busy web process never slows the simulation (in a thread of
+the web process they go straight into the queue, which never blocks). A robot's
 footstep plan changes only on a replan or a restart, so it is sent once and then referred to
 by :class:`FrameCodec` (the receiver fills it back in).
 """
@@ -15,12 +18,15 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import math
 import os
 import pickle
 import signal
 import threading
+import time
 import traceback
-from multiprocessing.connection import Connection
+from collections.abc import Callable
+from dataclasses import dataclass, field
 from typing import Any, cast
 
 import numpy as np
@@ -66,18 +72,42 @@ class FrameCodec:
             del self._plans[key]
 
 
+@dataclass
+class InProcess:
+    """A worker run by a thread of the web process (``app.live.engines.InProcessEngine``):
+    the loops' wall clock (a ``VirtualClock`` too: ``enter()``, ``wait(seconds, wake,
+    token)``, ``leave(token)``), and the parts it hosts, which the engine reads (their robots)."""
+
+    clock: Callable[[], float] = time.monotonic
+    virtual: Any = None
+    hosted: dict[str, _Hosted] = field(default_factory=dict)
+
+
 class _Hosted:
     """One session in this worker: its latest intent and the thread running its loop."""
 
-    def __init__(self, sid: str, intent: Intent, send, publish_hz: float):
+    def __init__(
+        self,
+        sid: str,
+        intent: Intent,
+        send,
+        publish_hz: float,
+        clock: Callable[[], float] = time.monotonic,
+        virtual: Any = None,
+    ):
         self.sid = sid
         self._intent = intent
         self._wake = threading.Event()
         self._stop = threading.Event()
+        self._virtual = virtual  # a VirtualClock, or None: the real one
+        # counted from now: the clock waits for its robots to be built
+        self._token = virtual.enter() if virtual is not None else 0
         self.loop = LiveLoop(
             lambda: self._intent,
             lambda f: send(("frame", sid, f)),
+            clock=clock,
             sleep=self._wait,
+            idle=self._idle if virtual is not None else None,
             publish_hz=publish_hz,
         )
         self._send = send
@@ -93,8 +123,15 @@ class _Hosted:
         self._wake.set()
 
     def _wait(self, seconds: float) -> None:
-        self._wake.wait(seconds)
+        if self._virtual is not None:
+            self._virtual.wait(seconds, self._wake, self._token)
+        else:
+            self._wake.wait(seconds)
         self._wake.clear()
+
+    def _idle(self, _seconds: float) -> None:
+        """Paused on a virtual clock: wait for a new intent, without moving the clock."""
+        self._wait(math.inf)
 
     def _run(self) -> None:
         try:
@@ -104,6 +141,9 @@ class _Hosted:
             self._send(
                 ("error", self.sid, f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=5)}")
             )
+        finally:
+            if self._virtual is not None:
+                self._virtual.leave(self._token)
 
 
 class Outbox:
@@ -166,24 +206,42 @@ class Outbox:
 
 
 def worker_main(
-    commands: Connection, frames: Connection, publish_hz: float, strategies: tuple[str, ...] = ()
+    commands,
+    frames,
+    publish_hz: float,
+    strategies: tuple[str, ...] = (),
+    host: InProcess | None = None,
 ) -> None:
-    """Entry point of a worker process: serve commands until told to stop or orphaned.
+    """Entry point of a worker: serve commands until told to stop or orphaned. ``commands``
+    and ``frames``: the ends of two pipes (``recv``, ``send_bytes``), or of two queues.
     ``strategies``: the files of a user's strategies the web process loaded (``serve
-    --strategy``), loaded here too so the robots' names mean the same classes."""
-    logging.basicConfig(level=logging.WARNING)
-    strategy.load_files(strategies)
-    # The web process stops its workers (Ctrl-C reaches the whole process group): ignore
-    # the signals; a worker also ends when the web process's pipe closes.
-    signal.signal(signal.SIGINT, signal.SIG_IGN)
-    signal.signal(signal.SIGTERM, signal.SIG_IGN)
-    outbox = Outbox(frames.send_bytes)
-    threading.Thread(target=outbox.run, name="outbox", daemon=True).start()
-    hosted: dict[str, _Hosted] = {}
+    --strategy``), loaded here too so the robots' names mean the same classes. ``host``: run
+    in a thread of the web process (its strategies loaded, its signals its own), whose queue
+    never blocks a loop: frames go straight to it, none dropped, with its clock."""
+    host_clock, virtual = time.monotonic, None
+    lock = threading.Lock()  # in a thread of the web process: the loops' threads send in turn
+    if host is None:
+        logging.basicConfig(level=logging.WARNING)
+        strategy.load_files(strategies)
+        # The web process stops its workers (Ctrl-C reaches the whole process group): ignore
+        # the signals; a worker also ends when the web process's pipe closes.
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        outbox = Outbox(frames.send_bytes)
+        threading.Thread(target=outbox.run, name="outbox", daemon=True).start()
+        hosted: dict[str, _Hosted] = {}
+    else:
+        outbox = Outbox(frames.send_bytes)  # (its codec; no thread: sent at once)
+        host_clock, virtual, hosted = host.clock, host.virtual, host.hosted
 
     def send(message: tuple) -> None:
         kind, pid, payload = message
-        if kind == "frame":
+        if host is not None:
+            with lock:
+                if kind == "frame":
+                    message = ("frame", pid, outbox.codec.encode(pid, payload))
+                frames.send_bytes(pickle.dumps(message, protocol=pickle.HIGHEST_PROTOCOL))
+        elif kind == "frame":
             outbox.put_frame(pid, payload)
         else:
             outbox.put(message)
@@ -196,13 +254,17 @@ def worker_main(
             break  # the web process is gone
         if kind == "open":
             (intent,) = payload
-            hosted[pid] = _Hosted(pid, intent, send, publish_hz)
+            hosted[pid] = _Hosted(pid, intent, send, publish_hz, host_clock, virtual)
             hosted[pid].thread.start()
         elif kind == "intent" and pid in hosted:
             hosted[pid].set_intent(payload)
         elif kind == "close" and pid in hosted:
             hosted.pop(pid).stop()
-            outbox.forget(pid)
+            if host is None:
+                outbox.forget(pid)
+            else:
+                with lock:
+                    outbox.codec.forget(pid)
         elif kind == "stop":
             break
     for h in hosted.values():

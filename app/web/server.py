@@ -2,10 +2,12 @@
 
 Processes and threads (the machine may have only two cores):
 
-- **worker processes** (``--workers`` x ``--robots-per-worker``, by default 6 robots a core
-  in workers of 3 robots: ``app.web.settings.worker_layout``; ``app.live.pool``) run the live
-  sessions, each paced to real time, and send their frames back; with ``--workers 0`` the
-  shared session runs in a thread of this process instead;
+- **worker processes** (``--workers`` x ``--robots-per-worker``, by default one worker a core
+  holding 6 robots: ``app.web.settings.worker_layout``; ``app.live.pool``, the one live mode)
+  run the live sessions, each paced to real time, and send their frames back; with
+  ``--workers 0`` the same pool runs its one worker in threads of this process instead (its
+  in-process engine, ``app.live.engines``: one process to debug or profile; the robots then
+  share this process's interpreter with the display);
 - the **display** thread (:class:`~app.web.view.Display`) draws each view's shown frame at
   most ``--display-hz`` times a second; viser's own thread sends the scene to the browsers;
 - **uvicorn** serves the page and the HTTP API in the main thread.
@@ -41,6 +43,7 @@ from typing import Any
 import viser
 from pydantic import ValidationError
 
+from app.live.engines import InProcessEngine
 from app.live.intent import DEFAULT_METHODS
 from app.live.pool import WorkerPool
 from app.live.registry import SessionRegistry
@@ -172,8 +175,6 @@ def serve(
     idle_timeout = settings.idle_timeout
     if port == viser_port:
         return _fail(f"--port and --viser-port must differ (both {port})")
-    if sessions == "private" and workers < 1:
-        return _fail("--sessions private needs worker processes (--workers 1 or more)")
     if not settings.shared_demo and sessions != "private":
         return _fail("--no-shared-demo needs --sessions private (else nothing would run)")
     secret = settings.instructor_token
@@ -183,7 +184,7 @@ def serve(
     except strategy.StrategyLoadError as exc:
         return _fail(f"--strategy {exc}")
     intent = initial_intent(methods=methods or (*DEFAULT_METHODS, *loaded))
-    if settings.shared_demo and workers and len(intent.methods) > workers * robots_per_worker:
+    if settings.shared_demo and len(intent.methods) > max(workers, 1) * robots_per_worker:
         return _fail(
             f"{workers} worker(s) x {robots_per_worker} robot(s) cannot hold the"
             f" {len(intent.methods)} robots of the demo; give more --workers or"
@@ -199,7 +200,9 @@ def serve(
         viser_server.stop()
         return _fail(f"port {viser_port} on {host} is in use; choose another with --viser-port")
 
-    pool = WorkerPool(workers, robots_per_worker, display_hz).start() if workers else None
+    # --workers 0: the same pool, its one worker in threads of this process
+    engine = None if workers else InProcessEngine()
+    pool = WorkerPool(max(workers, 1), robots_per_worker, display_hz, engine).start()
     registry = SessionRegistry.start(
         sessions,
         intent,
@@ -218,7 +221,7 @@ def serve(
         instructor=instructor,
         addresses=addresses,
     )
-    if pool is not None:
+    if not pool.in_process:
         # the main thread (uvicorn, and the API's worker threads it starts) keeps its
         # priority: the HTTP API is light and must answer promptly
         keep = pool.receiver_thread_ids() | {threading.get_native_id()}
@@ -235,14 +238,19 @@ def serve(
     teacher = "; instructor: open the page with ?token=<your token>" if instructor.enabled else ""
     print(
         f"pelvic-walk: open http://{shown}:{port}/  (3-D scene: http://{shown}:{viser_port}/,"
-        f" API docs: http://{shown}:{port}/docs); {workers} worker process"
-        f"{'es' if workers != 1 else ''}, {sessions} sessions{demo}{teacher}; Ctrl-C to stop",
+        f" API docs: http://{shown}:{port}/docs); "
+        + (
+            f"{workers} worker process{'es' if workers != 1 else ''}"
+            if workers
+            else "the robots in this process (--workers 0)"
+        )
+        + f", {sessions} sessions{demo}{teacher}; Ctrl-C to stop",
         flush=True,
     )
     if sessions == "private":
         print(
             private_room_line(
-                workers, robots_per_worker, len(intent.methods), settings.shared_demo
+                max(workers, 1), robots_per_worker, len(intent.methods), settings.shared_demo
             ),
             flush=True,
         )
@@ -256,8 +264,7 @@ def serve(
     finally:
         display.stop()
         registry.shutdown()
-        if pool is not None:
-            pool.stop()
+        pool.stop()
         app.state.runs.shutdown()
         viser_server.stop()
     if not server.started and status == 0:

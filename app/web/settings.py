@@ -34,24 +34,28 @@ MAX_DEFAULT_WORKERS = 16  # each worker holds MuJoCo and Pinocchio (~130 MB resi
 
 
 def worker_layout(workers: int | None, robots_per_worker: int | None) -> tuple[int, int]:
-    """(worker processes, robots each) from the options given (None: not given).
+    """(workers, robots each) from the options given (None: not given; 0 workers: the pool's
+    one worker in threads of the web process, holding the capacity).
 
     The machine's capacity is ROBOTS_PER_CORE robots a core. The robots of one worker take
-    turns on one core (Python's GIL), so by default a worker holds a session's worth of robots
-    (SESSION_ROBOTS) and there are as many workers as the capacity fills (at most
-    MAX_DEFAULT_WORKERS): the pool spreads a session's robots over the workers and the
-    operating system the workers over the cores. On 2 cores: 4 workers x 3 robots, the demo and
-    three private sessions of three. Given only ``workers``, they share the capacity out; given
-    only ``robots_per_worker``, the capacity decides the workers; 0 workers run the robots in
-    the web process.
+    turns on one core (Python's GIL), so by default there is one worker a core (at most
+    MAX_DEFAULT_WORKERS) and the capacity is shared out over them; the pool spreads a
+    session's robots over the workers and the operating system the workers over the cores.
+    On a 2-core laptop: 2 workers x 6 robots, each started once (MuJoCo and Pinocchio, ~130
+    MB and a second or two each), holding the demo and three private sessions of three.
+    Given only ``workers``, they share the capacity out; given only ``robots_per_worker``,
+    the capacity decides the workers. The demo's robots (SESSION_ROBOTS) always fit.
     """
-    capacity = max(1, int(ROBOTS_PER_CORE * (os.cpu_count() or 1)))
+    cores = os.cpu_count() or 1
+    capacity = max(1, int(ROBOTS_PER_CORE * cores))
     if workers is None:
-        per_worker = robots_per_worker or SESSION_ROBOTS
-        workers = min(capacity // per_worker, MAX_DEFAULT_WORKERS) or 1
-        robots_per_worker = per_worker
+        if robots_per_worker is None:
+            workers = min(cores, MAX_DEFAULT_WORKERS)
+        else:
+            workers = min(capacity // robots_per_worker, MAX_DEFAULT_WORKERS) or 1
     if robots_per_worker is None:
-        robots_per_worker = max(1, -(-capacity // max(workers, 1)))  # ceil
+        n = max(workers, 1)
+        robots_per_worker = max(-(-capacity // n), -(-SESSION_ROBOTS // n))  # ceil
     return workers, robots_per_worker
 
 
@@ -68,7 +72,8 @@ class Settings(BaseSettings):
     # None for both: a session's robots per worker, ROBOTS_PER_CORE robots a core
     # (worker_layout); what a machine holds is measured with serve + loadtest
     # (docs/PERFORMANCE.md, "Capacity").
-    # workers 0: the robots run in the web process.
+    # workers 0: the pool's one worker runs in threads of the web process (its in-process
+    # engine), holding the capacity.
     workers: int | None = Field(default=None, ge=0, le=64)
     sessions: Literal["shared", "private"] = "shared"
     robots_per_worker: int | None = Field(default=None, ge=1, le=16)  # robots one worker runs

@@ -63,9 +63,10 @@ def run_push(
     step: int = PUSH_STEP,
     n_steps: int = N_STEPS,
     params: ControllerParams | None = None,
+    phase: float = 0.5,
 ) -> PushOutcome:
     """Walk ``n_steps`` of ``step_length`` and push the torso ``force`` N toward ``direction``
-    for ``duration`` s from the middle of step ``step``'s single support."""
+    for ``duration`` s from ``phase`` of step ``step``'s single support (0.5: its middle)."""
     strategy.info(method)  # ValueError naming the choices
     if direction not in DIRECTIONS:
         raise ValueError(f"direction must be one of {', '.join(DIRECTIONS)}, got {direction!r}")
@@ -75,6 +76,8 @@ def run_push(
         raise ValueError(f"duration must be > 0 s, got {duration}")
     if not 0 <= step < n_steps:
         raise ValueError(f"the pushed step must be in 0..{n_steps - 1}, got {step}")
+    if not (math.isfinite(phase) and 0.0 <= phase <= 1.0):
+        raise ValueError(f"phase must be within 0..1 of the single support, got {phase}")
     base = params or ControllerParams()
     p = base.replace(method=method, walk={"step_length": step_length, "n_steps": n_steps})
     along = np.array(DIRECTIONS[direction])
@@ -85,9 +88,8 @@ def run_push(
     def push_time(session: Session) -> float:
         if not when:
             plan = session.plan
-            when["t"] = 0.5 * (
-                float(plan.liftoff_times()[step]) + float(plan.landing_times()[step])
-            )
+            lift, land = float(plan.liftoff_times()[step]), float(plan.landing_times()[step])
+            when["t"] = lift + phase * (land - lift)  # phase of the single support (0.5: middle)
         return when["t"]
 
     def com_speed(session: Session) -> float:  # the whole body's CoM velocity along the push
@@ -166,6 +168,7 @@ def largest_survived(
     step: int = PUSH_STEP,
     n_steps: int = N_STEPS,
     params: ControllerParams | None = None,
+    phase: float = 0.5,
 ) -> Survival:
     """Bisect the push size between 0 N and ``f_high`` until survived and failed are at most
     ``resolution`` apart.
@@ -176,7 +179,7 @@ def largest_survived(
     """
 
     def trial(f: float) -> PushOutcome:
-        return run_push(method, step_length, f, direction, duration, step, n_steps, params)
+        return run_push(method, step_length, f, direction, duration, step, n_steps, params, phase)
 
     lo, hi = 0.0, f_high
     why: str | None = None
