@@ -28,6 +28,7 @@ from pelvic_walk import _params
 from pelvic_walk._plots import differing_params, labels, param_value
 from pelvic_walk.core.metrics import COLUMN_UNITS, COLUMNS, with_unit
 from pelvic_walk.core.summary import COMPARE_KEYS
+from pelvic_walk.core.summary import outcome as summary_outcome
 
 if TYPE_CHECKING:
     import pandas as pd
@@ -226,17 +227,7 @@ class Run:
 
     def __repr__(self) -> str:
         s = self.summary
-        outcome = (
-            "clean"
-            if s["clean"]
-            else "success"
-            if s["success"]
-            else "FELL"
-            if s["fell"]
-            else "STOPPED by its strategy"
-            if s["strategy_error"]
-            else "incomplete"
-        )
+        outcome = summary_outcome(s)
         le = s["landing_error_max"]
         landing = f"{le * 100:.1f} cm" if le is not None else "- (none measured)"
         return (

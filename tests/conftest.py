@@ -24,7 +24,7 @@ from pathlib import Path
 import pytest
 
 # Whole files that are slow (the rest mark single tests with @pytest.mark.slow).
-SLOW_FILES = {"test_install", "test_schemathesis", "test_lint", "test_loadtest"}
+SLOW_FILES = {"test_install", "test_schemathesis", "test_lint", "test_loadtest", "test_rerun_rule"}
 BROWSER_GROUP = "real-browser tests"
 BROWSER_RERUNS = 1 if os.environ.get("CI", "").lower() in ("true", "1", "yes") else 0
 

@@ -59,6 +59,7 @@ def _assert_same_summary(ours: dict, theirs: dict, rel: float = 1e-9) -> None:
             assert a == b, key
 
 
+@pytest.mark.slow
 def test_switched_off_the_walk_is_the_compiled_one(tmp_path):
     """NUMBA_DISABLE_JIT=1 (numba's switch to step through kernels in pdb): the same code as
     plain Python, DAQP through ctypes; the summary equals the compiled run's, no QP fails."""
@@ -69,6 +70,7 @@ def test_switched_off_the_walk_is_the_compiled_one(tmp_path):
     _assert_same_summary(plain, json.loads(json.dumps(compiled_run)))
 
 
+@pytest.mark.slow
 def test_without_numba_the_walk_is_the_compiled_one(tmp_path):
     """numba not installed (its import fails): kernels are the plain functions, same walk."""
     script = (

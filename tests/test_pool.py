@@ -84,6 +84,7 @@ def test_a_session_split_across_workers_keeps_step(pool):
     assert pool.robots() == 0
 
 
+@pytest.mark.slow
 def test_a_fall_restarts_every_part_of_the_session_together(pool):
     """The robots run in different worker processes: the session (where their frames meet)
     restarts them all FALL_HOLD_S after one fell, at one session clock."""
@@ -316,6 +317,7 @@ def test_with_an_instructor_only_the_instructor_sees_private_sessions_ids(pool):
         registry.shutdown()
 
 
+@pytest.mark.slow
 def test_the_end_of_the_plans_restarts_every_part_together(pool):
     """Robots in different processes walk their whole (short) plan, stand, and the session
     restarts them all at one clock: none restarts alone and stands by (a view once stayed
@@ -337,6 +339,7 @@ def test_the_end_of_the_plans_restarts_every_part_together(pool):
         pool.close(s)
 
 
+@pytest.mark.slow
 def test_a_pause_keeps_every_frame_kept_while_running(pool):
     """Paused, every part's frame is merged, on each part's receiver thread: the merged frames
     reach the session in the order they were made (a frame handed on after a newer one read as

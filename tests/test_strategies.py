@@ -221,6 +221,7 @@ def test_simulate_says_a_stopped_walk_by_its_exit_status(user_file, capsys):
     assert f"ZeroDivisionError: float division by zero (faulty.py:{_line(path, '1.0 / (')})" in out
 
 
+@pytest.mark.slow
 def test_a_slow_strategy_is_reported_with_its_time(user_file, tmp_path, capsys):
     path = user_file(FAULTS, name="faults", file="faulty.py")
     out = tmp_path / "slow.json"

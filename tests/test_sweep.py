@@ -669,6 +669,7 @@ def _children() -> set[int]:
     return out
 
 
+@pytest.mark.slow
 def test_ray_gives_the_same_table_as_the_local_pool(request, tmp_path):
     ray = pytest.importorskip(
         "ray", reason="Ray is an optional extra: pip install '.[cluster]'", exc_type=ImportError

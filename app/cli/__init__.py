@@ -339,7 +339,7 @@ def simulate_method(args: argparse.Namespace) -> str:
 
 def _simulate(args: argparse.Namespace) -> int:
     from pelvic_walk.core.run import run, summarize
-    from pelvic_walk.core.summary import unsuccessful_text
+    from pelvic_walk.core.summary import outcome, unsuccessful_text
 
     try:
         cfg = simulate_config(args)
@@ -354,15 +354,7 @@ def _simulate(args: argparse.Namespace) -> int:
         recorder = Capture(params.method)
     session = run(cfg, on_tick=recorder.capture if recorder else None)
     summary = summarize(session)
-    ok = (
-        "success"
-        if summary["success"]
-        else "FELL"
-        if summary["fell"]
-        else "STOPPED by its strategy"
-        if summary["strategy_error"]
-        else "NO SUCCESS"
-    )
+    ok = outcome(summary, clean=False)
     le = summary["landing_error_max"]
     landing = f"{le * 100:.1f} cm" if le is not None else "-"
     print(

@@ -106,6 +106,18 @@ COMPARE_KEYS = (
 DEG = 180.0 / np.pi
 
 
+def outcome(summary: dict[str, Any], clean: bool = True) -> str:
+    """A run's outcome in a word, as the command line and a notebook's run print it: clean
+    (with ``clean``), success, FELL, STOPPED by its strategy, or NO SUCCESS."""
+    if clean and summary["clean"]:
+        return "clean"
+    if summary["success"]:
+        return "success"
+    if summary["fell"]:
+        return "FELL"
+    return "STOPPED by its strategy" if summary["strategy_error"] else "NO SUCCESS"
+
+
 def solver_failure_share(session: Session) -> float:
     """The share of the run's ticks on which some QP failed (0 before the first tick)."""
     w = session.walker
