@@ -35,7 +35,7 @@ from app.methods import METHOD_INFO
 from app.web.camera import CAMERA_VIEWS
 from app.web.learn_gui import LearnTab
 from app.web.lessons import PRESETS, warnings_for
-from app.web.overlays import legend_html
+from app.web.overlays import COLOUR_NAMES, DANGER, legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.record_gui import RecordFolder
 from app.web.scene import LAYERS, SLOW_STRATEGY_MS, fall_note
@@ -220,7 +220,8 @@ class ControlPanel:
                 "(eq. 19) moves to bring the measured CoM back onto it; **nothing moves the "
                 "footsteps**, so a push must be absorbed "
                 "within the planned footholds: a strong one makes the robot fall (it lies where "
-                f"it fell for {FALL_HOLD_S:g} s, marked red, then every robot restarts)."
+                f"it fell for {FALL_HOLD_S:g} s, ringed in {COLOUR_NAMES[DANGER]}, then every "
+                "robot restarts)."
             )
             self.push_robot = self.writer(gui.add_dropdown("Robot", intent.methods))
             self.push_force = self.writer(

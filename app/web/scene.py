@@ -19,13 +19,17 @@ the side, at x = (i - (n - 1) / 2) * ``ROBOT_SPACING``, the first one hindmost);
 (robots, overlays, floor) is shifted back in x to the middle of the robots' progress (the
 middle between the hindmost and the foremost), so every robot stays in view, a fallen one
 lying behind the others included, while the footholds and the floor stay fixed to the ground.
-A fallen robot gets a red ring on the floor and a label saying when and why it fell and when
-the session restarts every robot (app.live.session.FALL_HOLD_S).
+A fallen robot gets a vermilion ring on the floor and a label saying when and why it fell and
+when the session restarts every robot (app.live.session.FALL_HOLD_S). A robot its strategy
+stopped (it raised) stays in view too, with its error on its label, until the restart.
+Each label starts with the robot's marker (``MethodInfo.marker``), a cue that is not colour;
+the outermost labels on the screen are anchored at their inner edge, so their text extends
+toward the middle and never out of the frame.
 
 The prediction (the paper's Fig. 5-6), drawn on the floor so the body does not hide it: the
-CoM the CoM MPC predicts over the horizon (eq. 25-26) as a purple path from the robot
-forward, and across it, at every fourth predicted sample, the pelvis's hip line: purple and
-solid for the MPC's optimised angle theta (eq. 35), crimson, dashed and longer for the
+CoM the CoM MPC predicts over the horizon (eq. 25-26) as a sky-blue path from the robot
+forward, and across it, at every fourth predicted sample, the pelvis's hip line: sky blue and
+solid for the MPC's optimised angle theta (eq. 35), indigo, dashed and longer for the
 reference theta_ref (eq. 30-33). Only the MPC robot plans its pelvis; the redundancy robot
 shows its hip line now, the fixed one none.
 """
@@ -76,12 +80,12 @@ LAYERS: dict[str, tuple[str, bool]] = {  # key -> (GUI label, shown by default)
     "labels": ("Labels (method, status, numbers)", True),
     "prediction": ("Prediction: CoM path and hip lines (floor)", True),
     "footholds": ("Planned footholds", True),
-    "zmp": ("ZMP: reference (crimson disc) and measured (black dot)", True),
+    "zmp": ("ZMP: reference (indigo disc) and measured (black dot)", True),
     "support": ("Support polygon", False),
     "swing": ("Swing-foot path", False),
     "momentum": ("Yaw momentum arrow", True),
-    "reach": ("Legs by reach (grey -> red: knee straightening)", True),
-    "falls": ("Fall marker (red ring)", True),
+    "reach": ("Legs by reach (grey -> vermilion: knee straightening)", True),
+    "falls": ("Fall marker (vermilion ring)", True),
 }
 MOMENTUM_SCALE = 0.5  # [m per kg m^2/s] arrow length
 OVERLAY_HZ = 10.0  # overlay refreshes per second at most
@@ -209,18 +213,20 @@ class SceneView:
             client.camera.position = tuple(pos)
             client.camera.look_at = tuple(look)
 
-    def _refit(self, stagger: float) -> None:
+    def _refit(self, stagger: float, moved_from: np.ndarray | None = None) -> None:
         """Fit the named view again for robots ``stagger`` [m] apart along x, for every
         browser whose camera is still where the view put it (one the viewer turned or
-        zoomed is left alone)."""
+        zoomed is left alone); ``moved_from``: where a browser's camera stands that this
+        view has not placed yet (the initial camera before it changed)."""
         self._stagger = stagger
+        initial = self._initial if moved_from is None else moved_from
         clients = (
             list(self.target.get_clients().values())
             if isinstance(self.target, viser.ViserServer)
             else [self.target]
         )
         for client in clients:
-            placed = self._placed.get(client.client_id, self._initial)
+            placed = self._placed.get(client.client_id, initial)
             try:
                 here = np.asarray(client.camera.position, float)
             except AssertionError:  # nothing reported yet
@@ -263,9 +269,18 @@ class SceneView:
             )
             for i, m in enumerate(methods)
         ]
+        refit = len(methods) != len(self._methods)
         self._methods = methods
         self._keys.clear()
         self._apply_layers()
+        if refit and methods:  # the views fitted for the number of robots now shown
+            if isinstance(self.target, viser.ViserServer):
+                pos, look, _up, fov = camera_pose("follow", len(methods), 1.3, False)
+                self.target.initial_camera.position = tuple(pos)
+                self.target.initial_camera.look_at = tuple(look)
+            self._refit(self._stagger, moved_from=self._initial)
+            if isinstance(self.target, viser.ViserServer):
+                self._initial = np.asarray(pos, float)
 
     # -- drawing (display thread) ------------------------------------------------------------
     def draw(self, frame: LiveFrame, kept: FrameStore | None = None) -> None:
@@ -304,10 +319,12 @@ class SceneView:
                 self._draw_overlays(robots, y, kept)
             if labels and self.layers["labels"]:
                 self._label_time = now
-                for r, yi, label in zip(robots, y, self.labels, strict=True):
+                anchors = label_anchors(self.camera_view, y)
+                for r, yi, label, anchor in zip(robots, y, self.labels, anchors, strict=True):
                     label.set(
                         text=label_text(r, frame),
                         position=label_point(r.com[0], yi, r.slot, n, self.from_above),
+                        anchor=anchor,
                     )
 
     def _draw_overlays(
@@ -401,15 +418,37 @@ STAGGER_STEP = 0.5  # [m] the cameras are fitted again when the robots' stagger 
 
 
 def robot_xs(robots: tuple[RobotFrame, ...]) -> list[float]:
-    """[m] the forward positions the view follows: a walking robot's CoM, a fallen one's
-    middle (it lies there for a few seconds). A robot its strategy stopped stands until the
-    next restart, which may be minutes away: the view leaves it behind (unless all stopped)."""
-    going = [r for r in robots if r.error is None] or list(robots)
+    """[m] the forward positions the view follows, every robot's: a walking robot's CoM, a
+    fallen one's middle (it lies there until the restart), a stopped one's (its strategy
+    raised: it stands with its error on its label until the restart) where it stopped. The
+    view centres between the hindmost and the foremost and is fitted for their stagger, so
+    none leaves the picture."""
     return [
         (float(r.body_xpos[1:, 0].min()) + float(r.body_xpos[1:, 0].max())) / 2
         if r.fell
         else float(r.com[0])
-        for r in going
+        for r in robots
+    ]
+
+
+def label_anchors(view: str, offsets: np.ndarray) -> list[str]:
+    """Each label's anchor in the named view, robots at ``offsets`` (n, 2) [m] in x, y: the
+    leftmost robot on the screen has its label's left edge at its point (the text extends
+    toward the middle), the rightmost its right edge, the others their middle; seen from
+    above (labels beside the robots, in the middle of the screen) every one its middle. A
+    label centred over an outer robot ran out of the frame ("et line ahead · clean")."""
+    n = len(offsets)
+    if n < 2 or view == "top":
+        return ["bottom-center"] * n
+    direction, up, _fov = CAMERA_VIEWS[view]
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    u = np.asarray(up, float) - np.dot(up, d) * d
+    right = np.cross(u / np.linalg.norm(u), d)  # the screen's right, as camera_pose
+    xs = np.asarray(offsets, float)[:, :2] @ right[:2]
+    lo, hi = int(np.argmin(xs)), int(np.argmax(xs))
+    return [
+        "bottom-left" if i == lo else "bottom-right" if i == hi else "bottom-center"
+        for i in range(n)
     ]
 
 
@@ -463,7 +502,7 @@ def wrap(text: str, width: int = 48) -> str:
 def label_text(r: RobotFrame, frame: LiveFrame) -> str:
     """Method, status badge and live numbers, above the robot; when it fell, when and why,
     and when the session restarts every robot."""
-    head = METHOD_INFO[r.method].title
+    head = METHOD_INFO[r.method].tag  # its marker and title: "■ fixed pelvis"
     if r.error is not None:
         return f"⚠ {head} STOPPED\n{wrap(r.error)}\nRestart all robots together runs it again"
     if r.fell:
