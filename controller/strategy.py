@@ -134,7 +134,7 @@ class RedundancyPelvis(PelvisStrategy):
     name = REDUNDANCY
     label = "redundancy"
     paper_label = "rotation by redundancy [21]"
-    color = (85, 34, 68)  # dark plum
+    color = (100, 40, 85)  # plum, dark
 
     def waist_rate(self, s: StrategyInputs) -> None:
         return None
@@ -152,7 +152,7 @@ class PelvisMpcStrategy(PelvisStrategy):
     name = MPC
     label = "pelvic MPC"
     paper_label = "rotation by MPC (proposed)"
-    color = (230, 159, 0)  # Okabe-Ito orange
+    color = (230, 140, 0)  # orange (Okabe-Ito's, a shade deeper: apart from yellow as lit)
 
     def __init__(self, backend: str = "daqp"):
         self.backend = backend

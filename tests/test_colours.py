@@ -11,6 +11,7 @@ CAM02-UCS under each. docs/TEACHING.md holds the table of every pair's distance 
 
 The old palette failed it: under deuteranopia the green redundancy torso was 0.9 from the
 robot's grey body in grayscale and a student's magenta 6.3 from the teal of another.
+tests/test_browser_colours.py renders the torsos in Chromium and measures the colours shown.
 """
 
 from __future__ import annotations
@@ -100,6 +101,7 @@ def drawn():
     from app.live.loop import LiveLoop
     from app.live.session import initial_intent
     from app.local_server import free_port
+    from app.web.robot_meshes import mesh_color
     from app.web.scene import LAYERS, SceneView
     from controller import strategy
     from controller.params import ControllerParams
@@ -141,7 +143,10 @@ def drawn():
             scene.set_layer(key, True)
         scene.draw(dataclasses.replace(frames[-1], paused=True))
         model = mujoco.MjModel.from_xml_path(str(SCENE_XML))
-        body = {tuple(int(255 * c) for c in model.geom_rgba[g, :3]) for g in range(model.ngeom)}
+        body = {  # the limbs' colours as sent (the scene's light curve inverted, mesh_color)
+            tuple(int(v) for v in mesh_color(tuple(int(255 * c) for c in model.geom_rgba[g, :3])))
+            for g in range(model.ngeom)
+        }
         torsos: dict[str, set] = {m: set() for m in methods}
         for handle in scene.robots.handles.values():
             colours = np.asarray(handle.batched_colors).reshape(len(methods), -1, 3)
@@ -162,10 +167,11 @@ def drawn():
 def test_the_scene_draws_each_robot_in_its_colour_and_the_overlays_in_theirs(drawn):
     from app.methods import METHOD_INFO
     from app.web.overlays import DANGER, PLAN, PREDICTED, REFERENCE
+    from app.web.robot_meshes import mesh_color
 
     torsos, lines, _frame, _scene = drawn
-    for m, colours in torsos.items():
-        assert colours == {METHOD_INFO[m].color}, (m, colours)
+    for m, colours in torsos.items():  # sent so that it shows as the robot's colour when lit
+        assert colours == {tuple(int(v) for v in mesh_color(METHOD_INFO[m].color))}, (m, colours)
     shown = {METHOD_INFO[m].color for m in torsos}
     assert shown == set(robot_colours().values())  # the ones measured below
     assert {PREDICTED, REFERENCE, PLAN} <= lines, lines

@@ -1,0 +1,117 @@
+"""The robots' colours as Chromium renders them in the lit scene (issue 45, item 1).
+
+viser's client lights an instance colour brightly (grey 128 showed as 210, the MPC's orange as
+yellow), so the colours a student sees are not the ones sent. Here each robot's torso colour
+goes through :func:`app.web.robot_meshes.mesh_color` and the same batched-mesh call as the
+robots (a sphere per robot, lit as the scene lights them), Chromium renders it, and the colour
+where each sphere faces the camera is read back: it must be the robot's colour (the legends
+and plots use that one) and every pair must stay ``tests/test_colours.py``'s distance apart
+under normal vision, deuteranopia, protanopia, tritanopia and in grayscale.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+
+import numpy as np
+import pytest
+from browser_util import CHROME_ARGS, CHROMIUM, close_notice, free_port, needs_chromium
+from test_colours import MIN_DELTA_E, SIMULATIONS, delta_e, robot_colours
+
+pytestmark = needs_chromium
+
+MATCH_DELTA_E = 12.0  # [CAM02-UCS] a rendered torso at most this far from its legend colour
+BODY = (191, 191, 204)  # the limbs' colour (models/dyros_jet), through mesh_color too
+
+
+def render_spheres(colours: list[tuple[int, int, int]]) -> list[tuple[int, int, int]]:
+    """Each colour on a sphere drawn as the robots are; the median colour of a disc around
+    each sphere's centre as Chromium shows it."""
+    import trimesh
+    import viser
+    from PIL import Image
+    from playwright.sync_api import sync_playwright
+
+    from app.web.robot_meshes import mesh_color
+
+    vs = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        vs.scene.set_up_direction("+z")
+        sphere = trimesh.creation.icosphere(subdivisions=3)
+        n = len(colours)
+        d = np.array((0.74, -0.55, 0.38))  # the follow view's direction (app.web.camera)
+        d /= np.linalg.norm(d)
+        u = np.array((0.0, 0.0, 1.0)) - d[2] * d
+        u /= np.linalg.norm(u)
+        right = np.cross(u, d)
+        width, height, dist = 1700, 300, 60.0
+        fov = 2 * np.arctan(1.6 / dist)
+        px_per_m = height / 2 / np.tan(fov / 2) / dist
+        ks = [2.3 * (i - (n - 1) / 2) - 1.5 for i in range(n)]  # left of viser's panel
+        vs.scene.add_batched_meshes_simple(
+            "/spheres",
+            sphere.vertices,
+            sphere.faces,
+            batched_wxyzs=np.tile([1.0, 0, 0, 0], (n, 1)),
+            batched_positions=np.array([right * k for k in ks]),
+            batched_colors=np.array([mesh_color(c) for c in colours], np.uint8),
+            lod="off",
+        )
+        vs.initial_camera.position = tuple(d * dist)
+        vs.initial_camera.look_at = (0.0, 0.0, 0.0)
+        vs.initial_camera.fov = fov
+        vs.initial_camera.up = (0.0, 0.0, 1.0)
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
+            try:
+                page = browser.new_context(viewport={"width": width, "height": height}).new_page()
+                page.goto(f"http://127.0.0.1:{vs.get_port()}/")
+                canvas = page.locator("canvas").first
+                canvas.wait_for(state="visible", timeout=120_000)
+                close_notice(page)
+                time.sleep(6)  # the environment map loads, then the frame settles
+                png = canvas.screenshot(timeout=120_000)
+            finally:
+                browser.close()
+    finally:
+        vs.stop()
+    import io
+
+    im = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(float)
+    h, w = im.shape[:2]
+    yy, xx = np.mgrid[0:h, 0:w]
+    out = []
+    for k in ks:
+        cx, cy, r = w / 2 + k * px_per_m, h / 2, 0.4 * px_per_m
+        disc = (xx - cx) ** 2 + (yy - cy) ** 2 <= r * r
+        out.append(tuple(int(v) for v in np.median(im[disc], axis=0)))
+    return out
+
+
+@pytest.fixture(scope="module")
+def rendered():
+    colours = robot_colours()
+    shown = render_spheres([*colours.values(), BODY])
+    return dict(zip([*colours, "limbs"], shown, strict=True)), colours
+
+
+def test_a_torso_shows_its_robots_colour(rendered):
+    shown, colours = rendered
+    off = {
+        name: (colours[name], shown[name], round(delta_e(colours[name], shown[name], "normal"), 1))
+        for name in colours
+        if delta_e(colours[name], shown[name], "normal") > MATCH_DELTA_E
+    }
+    assert not off, f"rendered torsos far from their colours: {off}"
+
+
+@pytest.mark.parametrize("how", SIMULATIONS)
+def test_the_rendered_robot_colours_stay_apart(rendered, how):
+    shown, colours = rendered
+    close = [
+        (a, b, round(delta_e(shown[a], shown[b], how), 1))
+        for a, b in itertools.combinations(colours, 2)
+        if delta_e(shown[a], shown[b], how) < MIN_DELTA_E
+    ]
+    assert not close, f"{how}: rendered robot colours closer than {MIN_DELTA_E}: {close} {shown}"
