@@ -6,11 +6,12 @@ user loaded. Their names, labels and colours come from the strategy registry; th
 gives the displays one view of it (:data:`METHOD_INFO`, :func:`method_hex`).
 
 Colours for every student (docs/TEACHING.md, "Colours"): the fixed pelvis wears Okabe-Ito
-blue, the pelvic MPC Okabe-Ito orange, the redundancy robot a dark plum, and a user's strategy
-without a colour of its own black, then yellow (``controller.strategy.PALETTE``). Measured in
-CAM02-UCS, every pair stays apart (``tests/test_colours.py`` states the distance) for normal
-vision, deuteranopia, protanopia, tritanopia and in grayscale: from dark to light the five are
-black, plum, blue, orange and yellow, so lightness alone tells them apart when hue fails.
+blue, the pelvic MPC an orange (Okabe-Ito's, a shade deeper), the redundancy robot a dark
+plum, and a user's strategy without a colour of its own black, then yellow
+(``controller.strategy.PALETTE``). Measured in CAM02-UCS, every pair stays apart
+(``tests/test_colours.py`` states the distance) for normal vision, deuteranopia, protanopia,
+tritanopia and in grayscale: from dark to light the five are black, plum, blue, orange and
+yellow, so lightness alone tells them apart when hue fails.
 
 Colour is never the only cue: each robot also has a :attr:`MethodInfo.marker` (a symbol on its
 label in the scene and before its name in every legend) and a :attr:`MethodInfo.dash` (its line

@@ -234,6 +234,25 @@ class SceneView:
             if placed is not None and np.allclose(here, placed, atol=0.05):
                 self.set_camera(self.camera_view, client)
 
+    def _fit_new_browsers(self) -> None:
+        """A browser that joined the shared scene starts at the initial camera, fitted for a
+        canvas of aspect 1.3: once it reports its own canvas, fit the view to it (a narrow
+        window's canvas cut the outer robots and labels off). One the viewer moved already
+        is left alone."""
+        if not isinstance(self.target, viser.ViserServer):
+            return  # a browser's own scene was fitted to it when it was made
+        for cid, client in self.target.get_clients().items():
+            if cid in self._placed:
+                continue
+            try:
+                here = np.asarray(client.camera.position, float)
+            except AssertionError:  # nothing reported yet: at a later draw
+                continue
+            if self._initial is not None and np.allclose(here, self._initial, atol=0.05):
+                self.set_camera(self.camera_view, client)
+            else:
+                self._placed[cid] = np.full(3, np.nan)  # moved by its viewer: never refitted
+
     @property
     def along_x(self) -> bool:
         """Robots side by side along x (seen from the side), else along y."""
@@ -304,6 +323,7 @@ class SceneView:
         stagger = stagger_x(robots)
         if stagger != self._stagger:
             self._refit(stagger)
+        self._fit_new_browsers()
         target = follow_x(robots) if self.follow else 0.0
         jump = abs(target - self._follow_x) > 2.0 or frame.paused
         self._follow_x = target if jump else self._follow_x + 0.25 * (target - self._follow_x)
