@@ -17,7 +17,9 @@ from __future__ import annotations
 import time
 
 import pytest
-from browser_util import chromium, close_notice, get, needs_chromium, wait_until
+from browser_util import camera_reports, chromium, close_notice, get, needs_chromium, wait_until
+
+from app.web.camera import camera_pose
 
 pytestmark = needs_chromium
 WIDE = {"width": 1400, "height": 900}
@@ -154,6 +156,17 @@ def test_the_page_keeps_the_scene_whole_at_800_px(tool, browser):
     assert box["height"] >= 600, box
     aside = page.locator("aside").bounding_box()
     assert aside["y"] >= box["y"] + box["height"] - 1, (aside, box)  # below, not beside
+    # the view is fitted to this browser's canvas (narrower than the initial camera's 1.3),
+    # so every robot and label is inside it
+    cams = camera_reports(tool.viser)
+    n = len(get(tool.base, "state")["robots"])
+
+    def fitted() -> bool:
+        aspect = cams.client.camera.aspect
+        pos, _look, up, _fov = camera_pose("follow", n, aspect, False)
+        return aspect < 1.0 and cams.at(pos, up)
+
+    wait_until(fitted, "the follow view fitted to the narrow canvas")
     page.keyboard.press("Tab")
     time.sleep(0.2)
     ring = page.evaluate(

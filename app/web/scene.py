@@ -236,9 +236,9 @@ class SceneView:
 
     def _fit_new_browsers(self) -> None:
         """A browser that joined the shared scene starts at the initial camera, fitted for a
-        canvas of aspect 1.3: once it reports its own canvas, fit the view to it (a narrow
-        window's canvas cut the outer robots and labels off). One the viewer moved already
-        is left alone."""
+        canvas of aspect 1.3: once it reports its own canvas there, fit the view to it (a
+        narrow window's canvas cut the outer robots and labels off). One the viewer moved
+        away is left alone."""
         if not isinstance(self.target, viser.ViserServer):
             return  # a browser's own scene was fitted to it when it was made
         for cid, client in self.target.get_clients().items():
@@ -248,10 +248,9 @@ class SceneView:
                 here = np.asarray(client.camera.position, float)
             except AssertionError:  # nothing reported yet: at a later draw
                 continue
+            # (a browser reports a camera of its own before the initial one: wait for that)
             if self._initial is not None and np.allclose(here, self._initial, atol=0.05):
                 self.set_camera(self.camera_view, client)
-            else:
-                self._placed[cid] = np.full(3, np.nan)  # moved by its viewer: never refitted
 
     @property
     def along_x(self) -> bool:
