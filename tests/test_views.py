@@ -522,3 +522,48 @@ def test_a_stopped_robot_stays_in_view_with_its_message(two_robots):
             x = r.com[0] - centre + (-off if along_x else 0.0)
             y = 0.0 if along_x else off
             assert inside((x, y, 1.0)), (name, slot)
+
+
+def test_the_inspect_tab_lists_the_robots_by_their_labels(panel_view):
+    """As every legend names them ("pelvic MPC"), not by internal name ("mpc")."""
+    import time
+
+    from app.methods import METHOD_INFO
+
+    sim, view, _client = panel_view
+    assert sim.wait_frame(timeout=60) is not None
+    view.draw(time.monotonic() + 1000.0)
+    inspector = view.panel.inspector
+    titles = tuple(METHOD_INFO[m].title for m in ("fixed", "mpc"))
+    assert tuple(inspector.robot.options) == titles
+    assert inspector.robot.value == METHOD_INFO["mpc"].title
+
+
+def test_the_colour_words_are_those_of_the_colours_drawn():
+    """Lesson 1 said the swing leg "turns red" where it read pinkish; the page, the lessons
+    and the layers' names now use the words of the colours drawn (app.web.overlays)."""
+    import re
+
+    from app.web.api.pages import WORDS
+    from app.web.lessons import EXPLAIN, LESSONS
+    from app.web.overlays import COLOUR_NAMES, DANGER, LEG_GREY, reach_color
+    from app.web.scene import LAYERS
+    from tests.test_colours import ROOT
+
+    assert reach_color(1.0) == DANGER and reach_color(0.5) == LEG_GREY  # what the legs show
+    lesson1 = LESSONS[0].watch
+    assert f"turn {COLOUR_NAMES[DANGER]}" in lesson1, lesson1
+    page = (ROOT / "static" / "index.html").read_text(encoding="utf-8")
+    for key, words in WORDS.items():
+        page = page.replace(f"{{{{{key}}}}}", words)
+    texts = [
+        *(lesson.watch for lesson in LESSONS),
+        *EXPLAIN.values(),
+        *(label for label, _on in LAYERS.values()),
+        page,
+    ]
+    # colour words no overlay or gauge is drawn in ("orange-red" says what vermilion is)
+    stale = re.compile(r"(?<![-\w])(red|crimson|purple|pink|pinkish|magenta|teal)(?![-\w])", re.I)
+    found = [(m.group(0), t[max(0, m.start() - 30) : m.end() + 10]) for t in texts
+             for m in stale.finditer(t)]  # fmt: skip
+    assert not found, found
