@@ -1,4 +1,4 @@
-"""The robots' colours as Chromium renders them in the lit scene (issue 45, item 1).
+"""The robots' and the overlays' colours as Chromium renders them (issue 45, item 1).
 
 viser's client lights an instance colour brightly (grey 128 showed as 210, the MPC's orange as
 yellow), so the colours a student sees are not the ones sent. Here each robot's torso colour
@@ -6,7 +6,9 @@ goes through :func:`app.web.robot_meshes.mesh_color` and the same batched-mesh c
 robots (a sphere per robot, lit as the scene lights them), Chromium renders it, and the colour
 where each sphere faces the camera is read back: it must be the robot's colour (the legends
 and plots use that one) and every pair must stay ``tests/test_colours.py``'s distance apart
-under normal vision, deuteranopia, protanopia, tritanopia and in grayscale.
+under normal vision, deuteranopia, protanopia, tritanopia and in grayscale. The overlays'
+colours likewise, drawn as thick lines through :func:`app.web.overlays.line_color` (a line's
+colour is taken as linear light and tone-mapped too: the crimson reference read pink).
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import time
 import numpy as np
 import pytest
 from browser_util import CHROME_ARGS, CHROMIUM, close_notice, free_port, needs_chromium
-from test_colours import MIN_DELTA_E, SIMULATIONS, delta_e, robot_colours
+from test_colours import MIN_DELTA_E, SIMULATIONS, delta_e, overlay_colours, robot_colours
 
 pytestmark = needs_chromium
 
@@ -115,3 +117,83 @@ def test_the_rendered_robot_colours_stay_apart(rendered, how):
         if delta_e(shown[a], shown[b], how) < MIN_DELTA_E
     ]
     assert not close, f"{how}: rendered robot colours closer than {MIN_DELTA_E}: {close} {shown}"
+
+
+def render_lines(colours: list[tuple[int, int, int]]) -> list[tuple[int, int, int]]:
+    """Each colour as a thick line drawn as the overlays are (from the top, on white); the
+    median colour across the middle of each line as Chromium shows it."""
+    import io
+
+    import viser
+    from PIL import Image
+    from playwright.sync_api import sync_playwright
+
+    from app.web.overlays import vertex_colors
+
+    vs = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        n = len(colours)
+        ys = [0.8 * (i - (n - 1) / 2) for i in range(n)]
+        pts = np.array([[[-3.0, y, 0.0], [3.0, y, 0.0]] for y in ys], np.float32)
+        cols = np.concatenate([vertex_colors(c, 1) for c in colours])
+        vs.scene.add_line_segments("/lines", pts, cols, thickness=16, thickness_units="screen")
+        vs.initial_camera.position = (0.0, 0.0, 15.0)
+        vs.initial_camera.look_at = (0.0, 0.0, 0.0)
+        vs.initial_camera.up = (0.0, 1.0, 0.0)
+        with sync_playwright() as p:
+            browser = p.chromium.launch(executable_path=CHROMIUM, args=CHROME_ARGS)
+            try:
+                page = browser.new_context(viewport={"width": 900, "height": 700}).new_page()
+                page.goto(f"http://127.0.0.1:{vs.get_port()}/")
+                canvas = page.locator("canvas").first
+                canvas.wait_for(state="visible", timeout=120_000)
+                close_notice(page)
+                time.sleep(4)
+                png = canvas.screenshot(timeout=120_000)
+            finally:
+                browser.close()
+    finally:
+        vs.stop()
+    im = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(float)
+    column = im[:, im.shape[1] // 2]
+    rows = [y for y in range(len(column)) if np.abs(column[y] - 255).max() > 3]
+    groups: list[list[int]] = []
+    for y in rows:
+        if groups and y - groups[-1][-1] <= 1:
+            groups[-1].append(y)
+        else:
+            groups.append([y])
+    assert len(groups) == n, f"{len(groups)} lines seen, {n} drawn"
+    out = []
+    for g in groups[::-1]:  # the first colour lies lowest on the screen
+        mid, x = g[len(g) // 2], im.shape[1] // 2
+        patch = im[mid - 2 : mid + 3, x - 30 : x + 30].reshape(-1, 3)
+        out.append(tuple(int(v) for v in np.median(patch, axis=0)))
+    return out
+
+
+@pytest.fixture(scope="module")
+def rendered_lines():
+    colours = overlay_colours()
+    return dict(zip(colours, render_lines(list(colours.values())), strict=True)), colours
+
+
+def test_an_overlay_shows_its_colour(rendered_lines):
+    shown, colours = rendered_lines
+    off = {
+        name: (colours[name], shown[name], round(delta_e(colours[name], shown[name], "normal"), 1))
+        for name in colours
+        if delta_e(colours[name], shown[name], "normal") > MATCH_DELTA_E
+    }
+    assert not off, f"rendered overlays far from their colours: {off}"
+
+
+@pytest.mark.parametrize("how", SIMULATIONS)
+def test_the_rendered_overlay_colours_stay_apart(rendered_lines, how):
+    shown, colours = rendered_lines
+    close = [
+        (a, b, round(delta_e(shown[a], shown[b], how), 1))
+        for a, b in itertools.combinations(colours, 2)
+        if delta_e(shown[a], shown[b], how) < MIN_DELTA_E
+    ]
+    assert not close, f"{how}: rendered overlay colours closer than {MIN_DELTA_E}: {close}"

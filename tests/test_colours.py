@@ -166,7 +166,7 @@ def drawn():
 
 def test_the_scene_draws_each_robot_in_its_colour_and_the_overlays_in_theirs(drawn):
     from app.methods import METHOD_INFO
-    from app.web.overlays import DANGER, PLAN, PREDICTED, REFERENCE
+    from app.web.overlays import DANGER, PLAN, PREDICTED, REFERENCE, line_color
     from app.web.robot_meshes import mesh_color
 
     torsos, lines, _frame, _scene = drawn
@@ -174,7 +174,7 @@ def test_the_scene_draws_each_robot_in_its_colour_and_the_overlays_in_theirs(dra
         assert colours == {tuple(int(v) for v in mesh_color(METHOD_INFO[m].color))}, (m, colours)
     shown = {METHOD_INFO[m].color for m in torsos}
     assert shown == set(robot_colours().values())  # the ones measured below
-    assert {PREDICTED, REFERENCE, PLAN} <= lines, lines
+    assert {line_color(c) for c in (PREDICTED, REFERENCE, PLAN)} <= lines, lines
     assert DANGER in overlay_colours().values()
 
 
@@ -201,8 +201,8 @@ def test_every_pair_of_overlay_colours_stays_apart(how):
 @pytest.mark.parametrize("how", SIMULATIONS[:4])
 def test_a_torso_stands_out_from_the_robots_grey_body(how):
     """Under each deficiency a torso is not the grey of the limbs (the green one was, under
-    deuteranopia). In grayscale the orange torso's lightness is the limbs' (6.8): there its
-    place on the robot and the label's marker tell it."""
+    deuteranopia). In grayscale the orange and yellow torsos come within 11 of the limbs'
+    lightness: there the torso's place on the robot and the label's marker tell them."""
     body = (191, 191, 204)  # the limbs (models/dyros_jet)
     for name, c in robot_colours().items():
         assert delta_e(c, body, how) >= MIN_DELTA_E, (how, name, delta_e(c, body, how))

@@ -24,7 +24,7 @@ import viser
 from app.live.loop import LiveLoop
 from app.live.session import initial_intent
 from app.local_server import free_port
-from app.web.overlays import PREDICTED, REFERENCE
+from app.web.overlays import PREDICTED, REFERENCE, line_color
 from app.web.scene import LAYERS, SceneView, label_text
 from controller.params import ControllerParams
 from models.dyros_jet import SCENE_XML
@@ -85,7 +85,7 @@ def test_every_line_overlay_has_a_colour_per_vertex_from_its_creation(server, fr
         assert not bad, (f.clock, bad)
     # and the colours mean something: the prediction is PREDICTED and REFERENCE, not white
     colours = {tuple(c) for c in np.asarray(lines["prediction"].colors).reshape(-1, 3)}
-    assert PREDICTED in colours and REFERENCE in colours
+    assert line_color(PREDICTED) in colours and line_color(REFERENCE) in colours
 
 
 def test_a_label_shows_a_dash_until_a_number_exists(frames):

@@ -30,11 +30,11 @@ from controller.footsteps import LEFT
 from controller.pelvis_reference import hip_points
 
 # One colour per meaning (module docstring).
-REFERENCE = (51, 34, 136)  # indigo
+REFERENCE = (40, 27, 108)  # indigo, dark
 PREDICTED = (86, 180, 233)  # sky blue (Okabe-Ito)
 MEASURED = (0, 0, 0)  # black
-PLAN = (90, 90, 90)  # dark grey
-DANGER = (213, 94, 0)  # vermilion (Okabe-Ito): a straight leg's gauge ends there, a fall's ring
+PLAN = (80, 80, 80)  # dark grey
+DANGER = (204, 90, 0)  # vermilion (Okabe-Ito's, a shade darker): a straight leg, a fall's ring
 # The words for them wherever text names a colour (the page, the legend, the lessons)
 COLOUR_NAMES: dict[tuple[int, int, int], str] = {
     REFERENCE: "indigo",
@@ -57,6 +57,22 @@ FOOTHOLD_WINDOW = 1.2  # [m] footholds drawn ahead of and behind the robot
 
 
 LEG_GREY = (150, 150, 150)  # a bent leg's gauge
+
+
+# The colour a line or point of each colour (left, any channel) shows as in Chromium (right),
+# measured on grey lines (tests/test_browser_colours.py measures again): viser's client takes
+# a line's colour as linear light and tone-maps it, so sent as is every colour but black showed
+# paler (the crimson reference pinkish, the dark grey plan a light grey) and no line shows
+# lighter than about 226. :func:`line_color` inverts it, channel by channel.
+LINE_IN = (0, 10, 20, 40, 60, 90, 120, 160, 200, 230, 255)
+LINE_OUT = (0, 40, 72, 117, 147, 176, 193, 208, 218, 223, 226)
+
+
+def line_color(rgb: tuple[int, int, int]) -> tuple[int, int, int]:
+    """The colour to send for a line or point that shows as ``rgb`` (a channel lighter than
+    the lines' lightest shows as near as it can)."""
+    r, g, b = (int(round(np.interp(c, LINE_OUT, LINE_IN))) for c in rgb)
+    return r, g, b
 
 
 def reach_color(reach: float) -> tuple[int, int, int]:
@@ -143,8 +159,9 @@ def legend_html() -> str:
 
 
 def vertex_colors(color: tuple[int, int, int], n: int) -> np.ndarray:
-    """(n, 2, 3) uint8: one colour at both ends of ``n`` line segments."""
-    return np.tile(np.asarray(color, np.uint8), (n, 2, 1))
+    """(n, 2, 3) uint8: one colour at both ends of ``n`` line segments (as sent, so that the
+    lines show ``color``: :func:`line_color`)."""
+    return np.tile(np.asarray(line_color(color), np.uint8), (n, 2, 1))
 
 
 class Overlay:
@@ -195,7 +212,7 @@ def colored(parts: list[tuple[np.ndarray, tuple[int, int, int]]]) -> tuple[np.nd
     if not parts:
         return EMPTY_SEG, np.zeros((1, 2, 3), np.uint8)
     seg = np.concatenate([s for s, _c in parts]).astype(np.float32)
-    col = np.concatenate([np.tile(np.asarray(c, np.uint8), (len(s), 2, 1)) for s, c in parts])
+    col = np.concatenate([vertex_colors(c, len(s)) for s, c in parts])
     return seg, col
 
 

@@ -63,6 +63,7 @@ from app.web.overlays import (
     Overlay,
     colored,
     fall_ring,
+    line_color,
     polyline_segments,
     reach_color,
     rectangle_segments,
@@ -143,7 +144,7 @@ class SceneView:
             sc.add_point_cloud(
                 "/world/zmp",
                 np.zeros((1, 3), np.float32),
-                ZMP_REF,
+                line_color(ZMP_REF),
                 point_size=0.05,
                 point_shape="circle",
                 precision="float32",
@@ -153,7 +154,7 @@ class SceneView:
             sc.add_arrows(
                 "/world/momentum",
                 np.zeros((1, 2, 3), np.float32),
-                MOMENTUM,
+                line_color(MOMENTUM),
                 shaft_radius=0.015,
                 head_radius=0.04,
                 head_length=0.08,
@@ -392,10 +393,10 @@ class SceneView:
             for r, yi in zip(robots, y, strict=True):
                 if r.zmp_ref is not None:
                     pts.append((*(r.zmp_ref + yi), FLOOR_Z + 0.01))
-                    cols.append(ZMP_REF)
+                    cols.append(line_color(ZMP_REF))
                 if r.cop is not None:
                     pts.append((*(r.cop + yi), FLOOR_Z + 0.02))
-                    cols.append(ZMP_MEAS)
+                    cols.append(line_color(ZMP_MEAS))
             if pts:
                 ov["zmp"].set(points=np.array(pts, np.float32), colors=np.array(cols, np.uint8))
         if on["swing"]:
@@ -417,7 +418,9 @@ class SceneView:
                     for r, yi in zip(robots, y, strict=True)
                 ]
             )
-            colors = np.array([reach_color(v) for r in robots for v in r.reach], np.uint8)
+            colors = np.array(
+                [line_color(reach_color(v)) for r in robots for v in r.reach], np.uint8
+            )
             ov["reach"].lines(legs.astype(np.float32), np.repeat(colors[:, None, :], 2, axis=1))
         if self.sticks and kept is not None:
             key = tuple((id(r.plan), r.step_index) for r in robots)
