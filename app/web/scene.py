@@ -293,13 +293,13 @@ class SceneView:
         self._keys.clear()
         self._apply_layers()
         if refit and methods:  # the views fitted for the number of robots now shown
-            if isinstance(self.target, viser.ViserServer):
-                pos, look, _up, fov = camera_pose("follow", len(methods), 1.3, False)
+            old_initial = self._initial
+            if isinstance(self.target, viser.ViserServer):  # where a new browser starts
+                pos, look, _up, _fov = camera_pose("follow", len(methods), 1.3, False)
                 self.target.initial_camera.position = tuple(pos)
                 self.target.initial_camera.look_at = tuple(look)
-            self._refit(self._stagger, moved_from=self._initial)
-            if isinstance(self.target, viser.ViserServer):
                 self._initial = np.asarray(pos, float)
+            self._refit(self._stagger, moved_from=old_initial)
 
     # -- drawing (display thread) ------------------------------------------------------------
     def draw(self, frame: LiveFrame, kept: FrameStore | None = None) -> None:
