@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -548,7 +549,8 @@ def test_the_colour_words_are_those_of_the_colours_drawn():
     from app.web.lessons import EXPLAIN, LESSONS
     from app.web.overlays import COLOUR_NAMES, DANGER, LEG_GREY, reach_color
     from app.web.scene import LAYERS
-    from tests.test_colours import ROOT
+
+    ROOT = Path(__file__).resolve().parents[1]
 
     assert reach_color(1.0) == DANGER and reach_color(0.5) == LEG_GREY  # what the legs show
     lesson1 = LESSONS[0].watch
