@@ -24,8 +24,6 @@ import mujoco
 import numpy as np
 import pytest
 
-colorspacious = pytest.importorskip("colorspacious")
-
 ROOT = Path(__file__).resolve().parents[1]
 # [CAM02-UCS delta E] every pair apart under each simulation: well beyond the 1-2 at which two
 # large patches side by side stop looking alike, since a torso seen across a room and a 2 px
