@@ -513,6 +513,11 @@ def test_a_stopped_robot_stays_in_view_with_its_message(two_robots):
     assert stagger_x(robots) >= mpc.com[0] - stopped.com[0]
     text = label_text(stopped, dataclasses_replace(f, robots=robots))
     assert "STOPPED" in text and "ZeroDivisionError" in text
+    # far apart, the view zoomed out: the labels shorten, the message stays
+    crowded = dataclasses_replace(f, robots=robots)
+    short = label_text(stopped, crowded, compact=True)
+    assert "STOPPED" in short and "ZeroDivisionError" in short and "Restart" not in short
+    assert "\n" not in label_text(mpc, crowded, compact=True)
     for name in CAMERA_VIEWS:  # the view fitted for that stagger holds both
         along_x = name == "side"
         pos, look, up, fov = camera_pose(name, 2, 1.3, along_x, stagger_x(robots))

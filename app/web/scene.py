@@ -342,7 +342,7 @@ class SceneView:
                 anchors = label_anchors(self.camera_view, y)
                 for r, yi, label, anchor in zip(robots, y, self.labels, anchors, strict=True):
                     label.set(
-                        text=label_text(r, frame),
+                        text=label_text(r, frame, compact=self._stagger >= COMPACT_STAGGER),
                         position=label_point(r.com[0], yi, r.slot, n, self.from_above),
                         anchor=anchor,
                     )
@@ -437,6 +437,7 @@ class SceneView:
 
 
 STAGGER_STEP = 0.5  # [m] the cameras are fitted again when the robots' stagger crosses these
+COMPACT_STAGGER = 1.5  # [m] robots this far apart along x: the view zooms out, labels shorten
 
 
 def robot_xs(robots: tuple[RobotFrame, ...]) -> list[float]:
@@ -521,15 +522,21 @@ def wrap(text: str, width: int = 48) -> str:
     return "\n".join(textwrap.wrap(text, width)) or text
 
 
-def label_text(r: RobotFrame, frame: LiveFrame) -> str:
+def label_text(r: RobotFrame, frame: LiveFrame, compact: bool = False) -> str:
     """Method, status badge and live numbers, above the robot; when it fell, when and why,
-    and when the session restarts every robot."""
+    and when the session restarts every robot. ``compact``: the robots are far apart along
+    x (one stopped or fallen behind, the view zoomed out) and their labels crowd: a walking
+    robot's label is its first line, a stopped or fallen one's says what happened without
+    the restart line (the status area says it all)."""
     head = METHOD_INFO[r.method].tag  # its marker and title: "■ fixed pelvis"
     if r.error is not None:
-        return f"⚠ {head} STOPPED\n{wrap(r.error)}\nRestart all robots together runs it again"
+        rest = "" if compact else "\nRestart all robots together runs it again"
+        return f"⚠ {head} STOPPED\n{wrap(r.error, 40 if compact else 48)}{rest}"
     if r.fell:
         when, why, restart = fall_note(r, frame)
-        return f"⚠ {head} FELL {when}\n{why}\n{restart}"
+        return f"⚠ {head} FELL {when}\n{why}" + ("" if compact else f"\n{restart}")
+    if compact:
+        return f"{head} · {r.status}"
     if r.waiting:
         return f"{head}\nstanding by to start in phase"
     if r.finished and r.unsuccessful:  # the reasons one a line
