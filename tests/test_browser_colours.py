@@ -27,6 +27,26 @@ MATCH_DELTA_E = 12.0  # [CAM02-UCS] a rendered torso at most this far from its l
 BODY = (191, 191, 204)  # the limbs' colour (models/dyros_jet), through mesh_color too
 
 
+def settled(canvas, timeout: float = 90.0) -> bytes:
+    """A screenshot of the canvas once two taken 2 s apart agree (the environment map has
+    loaded and the frame settled: a busy machine takes longer)."""
+    deadline = time.monotonic() + timeout
+    last = None
+    while True:
+        time.sleep(2.0)
+        png = canvas.screenshot(timeout=120_000)
+        import io
+
+        from PIL import Image
+
+        now = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+        if last is not None and last.shape == now.shape and np.abs(now - last).max() <= 3:
+            return png
+        if time.monotonic() > deadline:
+            pytest.fail("the rendered canvas never settled")
+        last = now
+
+
 def render_spheres(colours: list[tuple[int, int, int]]) -> list[tuple[int, int, int]]:
     """Each colour on a sphere drawn as the robots are; the median colour of a disc around
     each sphere's centre as Chromium shows it."""
@@ -72,8 +92,7 @@ def render_spheres(colours: list[tuple[int, int, int]]) -> list[tuple[int, int, 
                 canvas = page.locator("canvas").first
                 canvas.wait_for(state="visible", timeout=120_000)
                 close_notice(page)
-                time.sleep(6)  # the environment map loads, then the frame settles
-                png = canvas.screenshot(timeout=120_000)
+                png = settled(canvas)
             finally:
                 browser.close()
     finally:
@@ -148,8 +167,7 @@ def render_lines(colours: list[tuple[int, int, int]]) -> list[tuple[int, int, in
                 canvas = page.locator("canvas").first
                 canvas.wait_for(state="visible", timeout=120_000)
                 close_notice(page)
-                time.sleep(4)
-                png = canvas.screenshot(timeout=120_000)
+                png = settled(canvas)
             finally:
                 browser.close()
     finally:
