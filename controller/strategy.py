@@ -121,7 +121,7 @@ class FixedPelvis(PelvisStrategy):
     name = FIXED
     label = "fixed pelvis"
     paper_label = "fixed pelvis (W/O rotation)"
-    color = (20, 80, 190)
+    color = (0, 114, 178)  # Okabe-Ito blue (pelvic_walk.core.methods says why these)
 
     def waist_rate(self, s: StrategyInputs) -> float:
         return 0.0
@@ -134,7 +134,7 @@ class RedundancyPelvis(PelvisStrategy):
     name = REDUNDANCY
     label = "redundancy"
     paper_label = "rotation by redundancy [21]"
-    color = (0, 150, 80)
+    color = (100, 40, 85)  # plum, dark
 
     def waist_rate(self, s: StrategyInputs) -> None:
         return None
@@ -152,7 +152,7 @@ class PelvisMpcStrategy(PelvisStrategy):
     name = MPC
     label = "pelvic MPC"
     paper_label = "rotation by MPC (proposed)"
-    color = (235, 150, 0)
+    color = (230, 140, 0)  # orange (Okabe-Ito's, a shade deeper: apart from yellow as lit)
 
     def __init__(self, backend: str = "daqp"):
         self.backend = backend
@@ -208,16 +208,14 @@ class StrategyLoadError(ValueError):
     One line, with the file (and line where there is one)."""
 
 
-# A palette for strategies without a colour of their own: apart from the built-ins' blue,
-# green and orange and from the scene's overlay colours (red references, purple predictions,
-# black measurements, grey plan).
+# A palette for strategies without a colour of their own (pelvic_walk.core.methods says how these
+# were
+# chosen): black and yellow (Okabe-Ito) stay apart from the built-ins' blue, plum and orange
+# and from each other for the common colour-vision deficiencies and in grayscale
+# (tests/test_colours.py); a third own strategy wears black again, told apart by its marker.
 PALETTE: tuple[tuple[int, int, int], ...] = (
-    (0, 160, 170),  # teal
-    (200, 60, 150),  # magenta
-    (130, 90, 40),  # brown
-    (110, 120, 0),  # olive
-    (90, 90, 90),  # dark grey
-    (0, 110, 230),  # azure
+    (0, 0, 0),  # black
+    (240, 228, 66),  # yellow
 )
 
 

@@ -4,7 +4,7 @@ restarting in step (lesson 6), and a paused, sought session that reads paused ev
 One served tool (``pelvic-walk serve``, shared mode) and one Chromium page. Every step acts
 once, then waits for a condition of the page or the API, never for a fixed time. Screenshots
 go to ``tests/artifacts/`` (looked at by people); the fall's ring is found in the canvas's
-pixels: it is drawn in a red (255, 0, 0) that nothing else in the scene uses.
+pixels: it is drawn in vermilion (DANGER, 204 90 0), which no robot's torso wears.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from PIL import Image
 
 from app.live import FALL_HOLD_S
 from app.web.lessons import LESSONS
+from app.web.overlays import DANGER
 
 pytestmark = needs_chromium
 VIEWPORT = {"width": 1200, "height": 760}
@@ -86,13 +87,15 @@ def page(tool):
 
 
 def _red_ring_pixels(pg, scene, name: str) -> int:
-    """Pixels of the canvas in the fall ring's red (a screenshot saved as ``name``)."""
+    """Pixels of the canvas in the fall ring's vermilion (DANGER, drawn as it is sent through
+    line_color: within a few levels of it; a screenshot saved as ``name``)."""
     ARTIFACTS.mkdir(parents=True, exist_ok=True)
     box = scene.locator("canvas").first.bounding_box()
     path = ARTIFACTS / name
     pg.screenshot(path=str(path), clip=box)
     rgb = np.asarray(Image.open(path).convert("RGB"), dtype=np.int16)
-    return int(np.sum((rgb[..., 0] >= 245) & (rgb[..., 1] <= 30) & (rgb[..., 2] <= 30)))
+    near = np.abs(rgb - np.array(DANGER, np.int16)).max(axis=-1) <= 22
+    return int(np.sum(near & (rgb[..., 2] <= 25)))
 
 
 def _open_tab(scene, name: str) -> None:
@@ -108,7 +111,7 @@ def _open_tab(scene, name: str) -> None:
 
 
 def test_lesson6_shows_the_fall_then_every_robot_walks_in_step(tool, page):
-    """The fixed pelvis falls at 0.42 m: on screen it lies inside its red ring and the panel
+    """The fixed pelvis falls at 0.42 m: on screen it lies inside its vermilion ring and the panel
     says when and why, for FALL_HOLD_S; then both robots walk again, in step."""
     pg, scene = page
     lesson = LESSONS[5]
@@ -165,7 +168,7 @@ def test_lesson6_shows_the_fall_then_every_robot_walks_in_step(tool, page):
     note.wait_for(state="visible")
     ring = _until(
         lambda: (n := _red_ring_pixels(pg, scene, "class_lesson6_fallen.png")) > 150 and n,
-        "the fall's red ring on the screen",
+        "the fall's vermilion ring on the screen",
     )
     after_shot = _get(tool, "state")  # still paused where it lies, whatever the wait took
     assert after_shot["clock"] == state["clock"], (after_shot["clock"], state["clock"])

@@ -1,6 +1,6 @@
 """Every page draws the same scene, in real browsers: two students' pages in private mode,
 loaded at different times, each on a session of its own that starts as the page connects,
-show the overlays in their colours -- the purple prediction and the crimson reference hip
+show the overlays in their colours -- the sky-blue prediction and the indigo reference hip
 lines -- and neither page logs an error while it loads.
 
 (The first page of a fresh session drew those lines near-white: viser's client keeps the
@@ -8,7 +8,7 @@ shader a line was first drawn with, and the lines were created with one colour, 
 until the session's first frame, and given one colour per vertex then;
 tests/test_same_scene.py checks what the scene sends.)
 
-The colours are read from screenshots of the scene: a pixel counts as purple or crimson by
+The colours are read from screenshots of the scene: a pixel counts as sky blue or indigo by
 its hue and saturation, so software rendering, fog and antialiasing change the counts but not
 the verdict; each page is waited for until it shows both (a page drawing white lines never
 does).
@@ -45,8 +45,9 @@ def tool():
 
 
 def colour_counts(png: bytes) -> dict[str, int]:
-    """Pixels of the overlays' hues: purple (predicted, 120 50 200) and crimson (reference,
-    205 30 70), saturated enough not to be the floor, a label or a robot's grey."""
+    """Pixels of the overlays' hues: sky blue (predicted, 86 180 233: hue 202) and indigo
+    (reference, 40 27 108: hue 251), saturated enough not to be the floor, a label or a
+    robot's grey (the MPC robot alone is shown: no blue torso)."""
     from PIL import Image
 
     a = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(float) / 255
@@ -59,8 +60,8 @@ def colour_counts(png: bytes) -> dict[str, int]:
     hue *= 60
     strong = ((hi - lo) / np.maximum(hi, 1e-9) > 0.35) & (hi > 0.3)
     return {
-        "purple": int((strong & (hue > 255) & (hue < 290)).sum()),
-        "crimson": int((strong & ((hue > 330) | (hue < 5)) & (b > 0.15)).sum()),
+        "sky blue": int((strong & (hue > 190) & (hue < 215)).sum()),
+        "indigo": int((strong & (hue > 238) & (hue < 265)).sum()),
     }
 
 
@@ -100,14 +101,14 @@ def test_two_pages_loaded_at_different_times_draw_the_overlays_in_colour(tool):
         wait_until(lambda: private_sessions() == 1, "the first page's own session")
         shown_first = wait_until(
             lambda: shows_colours(first, "first"),
-            "the first page to draw the prediction purple and the reference crimson",
+            "the first page to draw the prediction sky blue and the reference indigo",
             WAIT_S,
         )
         later, later_errors = open_page(browser, f"{base}/")
         wait_until(lambda: private_sessions() == 2, "the later page's own session")
         shown_later = wait_until(
             lambda: shows_colours(later, "later"),
-            "the page loaded later to draw the prediction purple and the reference crimson",
+            "the page loaded later to draw the prediction sky blue and the reference indigo",
             WAIT_S,
         )
         # the instructor sees both sessions, neither student the other's

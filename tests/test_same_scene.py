@@ -24,6 +24,7 @@ import viser
 from app.bench.local_server import free_port
 from app.live.loop import LiveLoop
 from app.live.session import initial_intent
+from app.web.overlays import PREDICTED, REFERENCE, line_color
 from app.web.scene import LAYERS, SceneView, label_text
 from controller.params import ControllerParams
 from models.dyros_jet import SCENE_XML
@@ -82,9 +83,9 @@ def test_every_line_overlay_has_a_colour_per_vertex_from_its_creation(server, fr
         scene.draw(dataclasses.replace(f, paused=True))  # paused: every overlay is drawn
         bad = {k: np.asarray(h.colors).shape for k, h in lines.items() if not per_vertex(h)}
         assert not bad, (f.clock, bad)
-    # and the colours mean something: the prediction is purple and crimson, not white
+    # and the colours mean something: the prediction is PREDICTED and REFERENCE, not white
     colours = {tuple(c) for c in np.asarray(lines["prediction"].colors).reshape(-1, 3)}
-    assert (120, 50, 200) in colours and (205, 30, 70) in colours
+    assert line_color(PREDICTED) in colours and line_color(REFERENCE) in colours
 
 
 def test_a_label_shows_a_dash_until_a_number_exists(frames):

@@ -363,8 +363,8 @@ def test_a_strategy_imports_a_module_beside_it_and_takes_a_free_colour(tmp_path)
             from pelvic_walk import PelvisStrategy
 
             class Teal(PelvisStrategy):
-                name = "wears_teal"
-                color = (0, 160, 170)  # the palette's first colour, chosen by the student
+                name = "wears_black"
+                color = (0, 0, 0)  # the palette's first colour, chosen by the student
 
                 def waist_rate(self, s):
                     return rate(s)
@@ -379,8 +379,8 @@ def test_a_strategy_imports_a_module_beside_it_and_takes_a_free_colour(tmp_path)
     )
     names = strategy.load_file(str(tmp_path / "two.py"))
     try:
-        assert set(names) == {"wears_teal", "wears_none"}
-        assert strategy.info("wears_none").color == strategy.PALETTE[1]  # teal is worn
+        assert set(names) == {"wears_black", "wears_none"}
+        assert strategy.info("wears_none").color == strategy.PALETTE[1]  # black is worn
         s = summarize(run(RunConfig(ControllerParams().replace(method="wears_none",
                                                               walk={"n_steps": 1}))))  # fmt: skip
         assert s["success"]

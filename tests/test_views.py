@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -442,3 +443,134 @@ def test_no_two_slider_marks_share_a_place_and_presets_read_whole(panel_view):
     assert all(len(name) <= 40 for name in PRESETS), list(PRESETS)
     axis = log_axis(1.0, 1e4)  # the top decade, the plot's edge, is left unlabelled
     assert axis["values"][-1] == "" and axis["values"][-2] == "1e3"
+
+
+# -- issue 45: labels inside the frame, stopped robots in view --------------------------------
+LABEL_W = 280.0  # [px] the widest label line (48 characters of a wrapped error, 13 px font)
+
+
+@pytest.mark.parametrize("name", ["follow", "side", "front"])
+@pytest.mark.parametrize("n", [2, 3, 4, 5])
+@pytest.mark.parametrize("size", [(640, 820), (800, 700), (1000, 860), (1400, 900)])
+def test_every_label_lies_inside_the_frame(name, n, size):
+    """The outer robots' labels extend toward the middle (with four robots the leftmost,
+    centred over its head, was cut: "et line ahead · clean"); the others are centred."""
+    from app.web.scene import label_anchors
+
+    width, height = size
+    along_x = name == "side"
+    px = _pixels(name, n, width / height, height)
+    offsets = np.array(
+        [(-slot_offset(i, n), 0.0) if along_x else (0.0, slot_offset(i, n)) for i in range(n)]
+    )
+    anchors = label_anchors(name, offsets)
+    for i, anchor in enumerate(anchors):
+        x = px(label_point(0.0, tuple(offsets[i]), i, n, from_above=False))[0]
+        lo = {"bottom-left": x, "bottom-right": x - LABEL_W}.get(anchor, x - LABEL_W / 2)
+        assert -width / 2 <= lo and lo + LABEL_W <= width / 2, (name, n, size, i, anchor)
+
+
+def test_the_camera_is_fitted_again_when_the_number_of_robots_changes(two_robots):
+    """Four robots in a camera fitted for three put the outermost at the frame's edge."""
+    import mujoco
+    import viser
+
+    from app.bench.local_server import free_port
+    from app.web.scene import SceneView
+    from models.dyros_jet import SCENE_XML
+
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        scene = SceneView(server, mujoco.MjModel.from_xml_path(str(SCENE_XML)))
+        f = two_robots[0]  # two robots
+        scene.draw(f)
+        two = camera_pose("follow", 2, 1.3, False)[0]
+        assert np.allclose(server.initial_camera.position, two)
+        r = f.robots[0]
+        more = tuple(
+            dataclasses_replace(r, method=m, slot=i)
+            for i, m in enumerate(("fixed", "redundancy", "mpc", "fixed")[:3])
+        )
+        scene.draw(dataclasses_replace(f, robots=more))
+        three = camera_pose("follow", 3, 1.3, False)[0]
+        assert np.allclose(server.initial_camera.position, three)
+    finally:
+        server.stop()
+
+
+def test_a_stopped_robot_stays_in_view_with_its_message(two_robots):
+    """A robot its strategy stopped stands where it stopped until the restart: the view
+    centres between it and the walkers and is fitted for their stagger, as for a fall, and
+    its label says why it stopped."""
+    from app.web.scene import follow_x, label_text, stagger_x
+
+    f = two_robots[-1]
+    fixed, mpc = two_robots[0].robots[0], f.robots[1]  # fixed stopped at the start
+    stopped = dataclasses_replace(fixed, error="ZeroDivisionError: division by zero (mine.py:3)")
+    mpc = dataclasses_replace(mpc, com=mpc.com + np.array([2.5, 0.0, 0.0]))  # walked on
+    robots = (stopped, mpc)
+    assert follow_x(robots) == pytest.approx((stopped.com[0] + mpc.com[0]) / 2)
+    assert stagger_x(robots) >= mpc.com[0] - stopped.com[0]
+    text = label_text(stopped, dataclasses_replace(f, robots=robots))
+    assert "STOPPED" in text and "ZeroDivisionError" in text
+    # far apart, the view zoomed out: the labels shorten, the message stays
+    crowded = dataclasses_replace(f, robots=robots)
+    short = label_text(stopped, crowded, compact=True)
+    assert "STOPPED" in short and "ZeroDivisionError" in short and "Restart" not in short
+    assert "\n" not in label_text(mpc, crowded, compact=True)
+    for name in CAMERA_VIEWS:  # the view fitted for that stagger holds both
+        along_x = name == "side"
+        pos, look, up, fov = camera_pose(name, 2, 1.3, along_x, stagger_x(robots))
+        inside = _project(pos, look, up, fov, 1.3)
+        centre = follow_x(robots)
+        for r, slot in zip(robots, (0, 1), strict=True):
+            off = slot_offset(slot, 2)
+            x = r.com[0] - centre + (-off if along_x else 0.0)
+            y = 0.0 if along_x else off
+            assert inside((x, y, 1.0)), (name, slot)
+
+
+def test_the_inspect_tab_lists_the_robots_by_their_labels(panel_view):
+    """As every legend names them ("pelvic MPC"), not by internal name ("mpc")."""
+    import time
+
+    from pelvic_walk.core.methods import METHOD_INFO
+
+    sim, view, _client = panel_view
+    assert sim.wait_frame(timeout=60) is not None
+    view.draw(time.monotonic() + 1000.0)
+    inspector = view.panel.inspector
+    titles = tuple(METHOD_INFO[m].title for m in ("fixed", "mpc"))
+    assert tuple(inspector.robot.options) == titles
+    assert inspector.robot.value == METHOD_INFO["mpc"].title
+
+
+def test_the_colour_words_are_those_of_the_colours_drawn():
+    """Lesson 1 said the swing leg "turns red" where it read pinkish; the page, the lessons
+    and the layers' names now use the words of the colours drawn (app.web.overlays)."""
+    import re
+
+    from app.web.api.pages import WORDS
+    from app.web.lessons import EXPLAIN, LESSONS
+    from app.web.overlays import COLOUR_NAMES, DANGER, LEG_GREY, reach_color
+    from app.web.scene import LAYERS
+
+    ROOT = Path(__file__).resolve().parents[1]
+
+    assert reach_color(1.0) == DANGER and reach_color(0.5) == LEG_GREY  # what the legs show
+    lesson1 = LESSONS[0].watch
+    assert f"turn {COLOUR_NAMES[DANGER]}" in lesson1, lesson1
+    page = (ROOT / "static" / "index.html").read_text(encoding="utf-8")
+    for key, words in WORDS.items():
+        page = page.replace(f"{{{{{key}}}}}", words)
+    texts = [
+        *(lesson.watch for lesson in LESSONS),
+        *EXPLAIN.values(),
+        *(label for label, _on in LAYERS.values()),
+        page,
+    ]
+    # colour words no overlay or gauge is drawn in ("orange-red" says what vermilion is)
+    stale = re.compile(r"(?<![-\w])(red|crimson|purple|pink|pinkish|magenta|teal)(?![-\w])", re.I)
+    found = [(m.group(0), t[max(0, m.start() - 30) : m.end() + 10]) for t in texts
+             for m in stale.finditer(t)]  # fmt: skip
+    assert not found, found

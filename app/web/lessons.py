@@ -16,6 +16,7 @@ from typing import Any
 from app.live import FALL_HOLD_S
 from app.web import lesson_numbers
 from app.web.lesson_math import analysis_html, analysis_numbers, analysis_svg, equations
+from app.web.overlays import COLOUR_NAMES, DANGER, PREDICTED, REFERENCE
 from controller import strategy
 from controller.strategy import BUILTINS, FIXED, MPC, REDUNDANCY
 
@@ -37,6 +38,8 @@ __all__ = [
 CLEAN_LIMIT_M = lesson_numbers.clean_limits()
 PAPER_LIMIT_M = lesson_numbers.paper_limits()
 _P = lesson_numbers.paper()
+# the words for the colours drawn (app.web.overlays): what a lesson names is what is drawn
+_DANGER, _PREDICTED, _REFERENCE = (COLOUR_NAMES[c] for c in (DANGER, PREDICTED, REFERENCE))
 _EQ5 = _P["kinematics"]["step_max_rotation"]  # [m] eq. (5) as the paper evaluates it
 
 # The paper's scenarios, in one place: parameter groups to change (others keep their value)
@@ -122,7 +125,8 @@ LESSONS: tuple[Lesson, ...] = (
         (FIXED, MPC),
         "follow",
         f"At {_PM:.2f} m, the paper's limit with rotation, watch the fixed robot's <b>swing leg "
-        "turn red</b> at each landing: its reach (hip-to-ankle / leg length) nears 1, the knee "
+        f"turn {_DANGER}</b> (orange-red) at each landing: its reach (hip-to-ankle / leg "
+        "length) nears 1, the knee "
         "is straight and <b>kappa(J)</b> of its legs explodes; its badge says <i>knee nearly "
         "straight</i> or <i>IK at the speed limit</i>. The MPC robot turns its pelvis (about "
         f"{lesson_numbers.mpc_waist_deg(_PM):.0f}°): its kappa at landing stays near "
@@ -220,7 +224,8 @@ LESSONS: tuple[Lesson, ...] = (
         f"({_EQ4['eq4']:.3f} m): the stance hip "
         f"travels forward during the step, so our limits are fixed {_F:.2f} m, MPC {_M:.2f} m "
         f"(paper: {_PF:.2f} / {_PM:.2f} m). Here the fixed robot <b>falls</b> in its second "
-        f"step: it lies where it fell, ringed in red, for {FALL_HOLD_S:g} s while the MPC walks "
+        f"step: it lies where it fell, ringed in {_DANGER}, for {FALL_HOLD_S:g} s while the MPC "
+        "walks "
         f"on with much less than {_EQ4['theta']:.0f}°, then both restart together. Compare the "
         "measured hip "
         "advance with eq. 2's l_pel sin(theta). Eq. 1-5 assume the leg is stretched straight at "
@@ -239,7 +244,7 @@ LESSONS: tuple[Lesson, ...] = (
         "its plan (its ZMP stays inside the support foot, eq. 18); the pelvis position "
         "(eq. 19) moves to bring the measured CoM back onto the planned one, but <b>nothing "
         "moves the footsteps</b>: a push the foot cannot absorb "
-        f"topples the robot (try 300 N): it lies ringed in red for {FALL_HOLD_S:g} s, then "
+        f"topples the robot (try 300 N): it lies ringed in {_DANGER} for {FALL_HOLD_S:g} s, then "
         "every robot restarts together. In a terminal, <code>pelvic-walk push-study</code> "
         "measures the largest push each method survives (<code>pelvic-walk push-study "
         "--help</code> for the direction, duration and step length).",
@@ -296,13 +301,13 @@ EXPLAIN: dict[str, str] = {
         "(the pelvic rotation) differs: **fixed** keeps it at 0, **redundancy** (ref. [21]) "
         "lets the IK use it with no preview, the **pelvic-rotation MPC** plans it over the "
         "horizon. Raise the step length and watch the **reach gauges**: the fixed pelvis "
-        "straightens its swing leg (red) first."
+        f"straightens its swing leg ({_DANGER}) first."
     ),
     "CoM MPC (eq. 10-18)": (
         "A linear inverted pendulum at constant height, state [p, v, a] per axis, input = jerk "
         "(eq. 10-12). Over the horizon H it trades **alpha** x ZMP tracking, **beta** x CoM "
         "velocity changes and **gamma** x jerk (eq. 18), keeping the ZMP inside the support "
-        "area. The **purple** path on the floor is its predicted CoM (eq. 25-26)."
+        f"area. The **{_PREDICTED}** path on the floor is its predicted CoM (eq. 25-26)."
     ),
     "Pelvis position (eq. 19)": (
         "The pelvis follows the desired CoM and corrects the offset to the CoM measured from "
@@ -318,20 +323,22 @@ EXPLAIN: dict[str, str] = {
     "Reference pelvic angle (eq. 27-33)": (
         "At each predicted sample the pelvis is put at the predicted CoM (eq. 27) and the angle "
         "is the mean over both feet of atan(k_pel dx / dy) (eq. 28-33), signed so each hip "
-        "turns **toward its own foot**. The **crimson dashed hip lines** on the floor show it "
+        f"turns **toward its own foot**. The **{_REFERENCE} dashed hip lines** on the floor "
+        "show it "
         "over the horizon."
     ),
     "Pelvic-rotation MPC (eq. 34-38)": (
         "A double integrator theta'' = u tracks the reference with weight **alpha_pel** and "
         "penalises u with **beta_pel**, with |theta| under the angle limit (eq. 34-38). The "
-        "**purple solid hip lines** are its optimised angles: it starts turning *before* the "
+        f"**{_PREDICTED} solid hip lines** are its optimised angles: it starts turning "
+        "*before* the "
         "swing. At small beta_pel they lie on the reference's (the Inspect tab says why)."
     ),
     "QP inverse kinematics (eq. 39-40)": (
         "13 joint velocities (waist yaw + two legs) make the feet follow their paths: "
         "min ||J q' - x'_feet||^2 with joint and speed limits (eq. 39-40). The waist rate is "
         "pinned to 0 (fixed), free (redundancy) or the MPC's rate (mpc). The **leg colours** "
-        "show the reach: hip-to-ankle distance / leg length, red near 1 (straight knee)."
+        f"show the reach: hip-to-ankle distance / leg length, {_DANGER} near 1 (straight knee)."
     ),
     "Arm swing (eq. 41-43)": (
         "The arms cancel the legs' yaw momentum: min omega1 (h_low + h_up)^2 + omega2 "

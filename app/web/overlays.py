@@ -2,12 +2,19 @@
 marker) and their colours; an :class:`Overlay` re-sends a handle's data only when it changed.
 
 One colour per meaning, in the scene, its legend, the horizon inspector and the recordings:
-REFERENCE (what a layer is asked to follow: ZMP reference, theta_ref; drawn dashed or hollow),
-PREDICTED (what an MPC optimised or predicts over its horizon: CoM path, the MPC's theta, the
-predicted ZMP; solid), MEASURED (the simulated robot: centre of pressure, yaw momentum; black),
-PLAN (the footstep plan's geometry: footholds, support polygon, swing path; grey) and DANGER
-(a leg nearly straight, a fall; bright red). None of them is a method colour
-(pelvic_walk.core.methods)."""
+REFERENCE (what a layer is asked to follow: ZMP reference, theta_ref; indigo, drawn dashed or
+hollow), PREDICTED (what an MPC optimised or predicts over its horizon: CoM path, the MPC's
+theta, the predicted ZMP; sky blue, solid), MEASURED (the simulated robot: centre of pressure,
+yaw momentum; black), PLAN (the footstep plan's geometry: footholds, support polygon, swing
+path; grey) and DANGER (a leg nearly straight, a fall; vermilion, an orange-red).
+
+Chosen for every student (docs/TEACHING.md, "Colours"): sky blue, black and vermilion are
+Okabe-Ito colours; the five stay at least ``tests/test_colours.py``'s distance apart (CAM02-UCS)
+for normal vision, deuteranopia, protanopia, tritanopia and in grayscale, where lightness alone
+tells them apart: black, indigo, dark grey, vermilion, sky blue from dark to light. Meaning is
+never carried by colour alone: references are dashed, a fall is a ring, a straight leg is also
+said on the robot's label. The words the page, legend and lessons use for them are
+:data:`COLOUR_NAMES`."""
 
 from __future__ import annotations
 
@@ -20,14 +27,22 @@ from app.live import RobotFrame
 from app.live.history import FrameStore
 from controller.footsteps import LEFT
 from controller.pelvis_reference import hip_points
-from pelvic_walk.core.methods import METHOD_INFO
+from pelvic_walk.core.methods import METHOD_INFO, MethodInfo
 
 # One colour per meaning (module docstring).
-REFERENCE = (205, 30, 70)  # crimson
-PREDICTED = (120, 50, 200)  # purple
-MEASURED = (20, 20, 20)  # black
-PLAN = (120, 120, 120)  # grey
-DANGER = (255, 0, 0)  # bright red (a straight leg's gauge ends at a darker (210, 0, 0))
+REFERENCE = (40, 27, 108)  # indigo, dark
+PREDICTED = (86, 180, 233)  # sky blue (Okabe-Ito)
+MEASURED = (0, 0, 0)  # black
+PLAN = (80, 80, 80)  # dark grey
+DANGER = (204, 90, 0)  # vermilion (Okabe-Ito's, a shade darker): a straight leg, a fall's ring
+# The words for them wherever text names a colour (the page, the legend, the lessons)
+COLOUR_NAMES: dict[tuple[int, int, int], str] = {
+    REFERENCE: "indigo",
+    PREDICTED: "sky blue",
+    MEASURED: "black",
+    PLAN: "grey",
+    DANGER: "vermilion",
+}
 PREDICTION = PREDICTED  # the CoM path and the MPC's hip lines
 GROUND = PLAN  # footholds, swing path
 SUPPORT = (40, 40, 40)  # the support polygon: the plan's, darker (it is under the robot)
@@ -41,11 +56,31 @@ FLOOR_Z = 0.006  # [m] overlays on the floor, just above it
 FOOTHOLD_WINDOW = 1.2  # [m] footholds drawn ahead of and behind the robot
 
 
+LEG_GREY = (150, 150, 150)  # a bent leg's gauge
+
+
+# The colour a line or point of each colour (left, any channel) shows as in Chromium (right),
+# measured on grey lines (tests/test_browser_colours.py measures again): viser's client takes
+# a line's colour as linear light and tone-maps it, so sent as is every colour but black showed
+# paler (the crimson reference pinkish, the dark grey plan a light grey) and no line shows
+# lighter than about 226. :func:`line_color` inverts it, channel by channel.
+LINE_IN = (0, 10, 20, 40, 60, 90, 120, 160, 200, 230, 255)
+LINE_OUT = (0, 40, 72, 117, 147, 176, 193, 208, 218, 223, 226)
+
+
+def line_color(rgb: tuple[int, int, int]) -> tuple[int, int, int]:
+    """The colour to send for a line or point that shows as ``rgb`` (a channel lighter than
+    the lines' lightest shows as near as it can)."""
+    r, g, b = (int(round(np.interp(c, LINE_OUT, LINE_IN))) for c in rgb)
+    return r, g, b
+
+
 def reach_color(reach: float) -> tuple[int, int, int]:
-    """Grey while the knee is bent (reach <= 0.85), to red as the leg straightens (1.0): a
-    darker red than the fall ring's, which no leg reaches."""
+    """Grey while the knee is bent (reach <= 0.85), to DANGER (vermilion) as the leg
+    straightens (1.0)."""
     f = float(np.clip((reach - 0.85) / 0.15, 0.0, 1.0)) if math.isfinite(reach) else 0.0
-    return (int(150 + 60 * f), int(150 - 150 * f), int(150 - 150 * f))
+    r, g, b = (int(round(a + (z - a) * f)) for a, z in zip(LEG_GREY, DANGER, strict=True))
+    return r, g, b
 
 
 def rectangle_segments(centres: np.ndarray, size: tuple[float, float], z: float) -> np.ndarray:
@@ -77,32 +112,56 @@ def dashed(segments: np.ndarray, pieces: int = 4) -> np.ndarray:
 
 
 def legend_html() -> str:
-    """The scene's colours, for the GUI."""
+    """The scene's colours and the robots' markers and line styles, for the GUI: every entry
+    says in words what its colour shows (a colour is never the only cue)."""
 
-    def sw(rgb: tuple[int, int, int], text: str, dash: bool = False) -> str:
-        style = f"border-top:3px dashed rgb{rgb}" if dash else f"background:rgb{rgb}"
+    def sw(rgb: tuple[int, int, int], text: str, dash: str = "") -> str:
+        style = f"border-top:3px {dash} rgb{rgb}" if dash else f"background:rgb{rgb}"
         return (
-            f"<span style='display:inline-block;width:16px;height:{0 if dash else 10}px;"
-            f"{style};margin:0 4px 0 10px;vertical-align:middle'></span>{text}"
+            f"<span aria-hidden='true' style='display:inline-block;width:16px;"
+            f"height:{0 if dash else 10}px;{style};margin:0 4px 0 10px;"
+            f"vertical-align:middle'></span>{text}"
         )
 
-    robots = "".join(sw(i.color, i.title) for i in METHOD_INFO.values())
+    def robot(i: MethodInfo) -> str:
+        line = (
+            "solid"
+            if not i.dash
+            else "dash-dot"
+            if len(i.dash) > 2
+            else "dashed"
+            if i.dash[0] > 4
+            else "dotted"
+        )
+        css = "dashed" if line == "dash-dot" else line
+        return sw(i.color, f"<b>{i.marker}</b>&nbsp;{i.title} (plots: {line})", dash=css)
+
+    robots = "<br>".join(robot(i) for i in METHOD_INFO.values())
+    n = COLOUR_NAMES
     parts = [
-        sw(PREDICTED, "<b>predicted</b> / optimised: CoM path, MPC hip line θ"),
-        sw(REFERENCE, "<b>reference</b>: θ_ref hip line, ZMP reference (disc)", dash=True),
-        sw(MEASURED, "<b>measured</b>: CoP (dot), yaw momentum (arrow)"),
-        sw(PLAN, "plan: footholds"),
-        sw(DANGER, "leg nearly straight; fall (ring)"),
+        sw(
+            PREDICTED,
+            f"<b>predicted</b> / optimised ({n[PREDICTED]}, solid): CoM path, MPC hip line θ",
+        ),
+        sw(
+            REFERENCE,
+            f"<b>reference</b> ({n[REFERENCE]}, dashed): θ_ref hip line, ZMP reference (disc)",
+            dash="dashed",
+        ),
+        sw(MEASURED, f"<b>measured</b> ({n[MEASURED]}): CoP (dot), yaw momentum (arrow)"),
+        sw(PLAN, f"plan ({n[PLAN]}): footholds"),
+        sw(DANGER, f"{n[DANGER]}: leg nearly straight; fall (ring)"),
     ]
     return (
-        f"<div style='font-size:12px;line-height:1.8'>Robots (torso): {robots}<br>"
-        f"{'<br>'.join(parts)}</div>"
+        f"<div style='font-size:12px;line-height:1.8'>Robots (torso and head; marker on the "
+        f"label):<br>{robots}<br>{'<br>'.join(parts)}</div>"
     )
 
 
 def vertex_colors(color: tuple[int, int, int], n: int) -> np.ndarray:
-    """(n, 2, 3) uint8: one colour at both ends of ``n`` line segments."""
-    return np.tile(np.asarray(color, np.uint8), (n, 2, 1))
+    """(n, 2, 3) uint8: one colour at both ends of ``n`` line segments (as sent, so that the
+    lines show ``color``: :func:`line_color`)."""
+    return np.tile(np.asarray(line_color(color), np.uint8), (n, 2, 1))
 
 
 class Overlay:
@@ -153,7 +212,7 @@ def colored(parts: list[tuple[np.ndarray, tuple[int, int, int]]]) -> tuple[np.nd
     if not parts:
         return EMPTY_SEG, np.zeros((1, 2, 3), np.uint8)
     seg = np.concatenate([s for s, _c in parts]).astype(np.float32)
-    col = np.concatenate([np.tile(np.asarray(c, np.uint8), (len(s), 2, 1)) for s, c in parts])
+    col = np.concatenate([vertex_colors(c, len(s)) for s, c in parts])
     return seg, col
 
 

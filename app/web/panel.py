@@ -34,7 +34,7 @@ from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX
 from app.web.camera import CAMERA_VIEWS
 from app.web.learn_gui import LearnTab
 from app.web.lessons import PRESETS, warnings_for
-from app.web.overlays import legend_html
+from app.web.overlays import COLOUR_NAMES, DANGER, legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.qp_view import QpView
 from app.web.record_gui import RecordFolder
@@ -56,6 +56,24 @@ REFUSED = "**Not applied:** the instructor drives this demo (your controls are r
 DISABLED_SLIDER_STYLE = (  # (Mantine marks a disabled slider's track, not its root)
     "<style>.mantine-Slider-root:has(.mantine-Slider-trackContainer[data-disabled])"
     " ~ .mantine-NumberInput-root{opacity:.45;pointer-events:none}</style>"
+)
+# Named and seen by everyone (issue 45; docs/TEACHING.md, "Accessibility"): viser's default blue
+# (#228be6) under white button text, as outline buttons' text, and Mantine's grey "dimmed"
+# labels (#868e96) are below 4.5:1 on white. A darker brand colour (its buttons' shade
+# #1c63d5: 5.5:1) and darker dimmed text (#495057: 8.2:1) through the theme's CSS variables;
+# a focus ring a keyboard user sees on every control.
+BRAND_COLOR = (20, 70, 150)
+THEME: dict[str, Any] = {
+    "control_width": "large",
+    "dark_mode": False,
+    "show_logo": False,
+    "show_share_button": False,
+    "brand_color": BRAND_COLOR,
+}
+A11Y_STYLE = (
+    "<style>:root[data-mantine-color-scheme],:root{--mantine-color-dimmed:#495057}"
+    ".mantine-focus-auto:focus-visible,[role=slider]:focus-visible,[role=tab]:focus-visible"
+    "{outline:3px solid #1c63d5 !important;outline-offset:2px}</style>"
 )
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
 PUSH_DIRECTIONS = {
@@ -101,18 +119,13 @@ class ControlPanel:
         self._message_at = -math.inf  # time.monotonic() when it was said (shown MESSAGE_S)
         self._status_time = -math.inf
         gui.main_panel.dock_right()  # docked, not floating over the scene (viser's default)
-        gui.configure_theme(
-            control_width="large",
-            dark_mode=False,
-            show_logo=False,
-            show_share_button=False,
-        )
+        gui.configure_theme(**THEME)
         notice = "  \n".join(
             x for x in (view.notice, READ_ONLY_NOTE if self.read_only else None) if x
         )
         # viser greys a disabled slider but not the number box beside it, which then looks
         # as if typing in it would act: grey that box too and let it take no clicks
-        style = gui.add_html(DISABLED_SLIDER_STYLE)
+        style = gui.add_html(DISABLED_SLIDER_STYLE + A11Y_STYLE)
         self.notice = gui.add_markdown(notice)
         self.notice.visible = bool(notice)
         self.status = gui.add_markdown("starting...")
@@ -222,7 +235,8 @@ class ControlPanel:
                 "(eq. 19) moves to bring the measured CoM back onto it; **nothing moves the "
                 "footsteps**, so a push must be absorbed "
                 "within the planned footholds: a strong one makes the robot fall (it lies where "
-                f"it fell for {FALL_HOLD_S:g} s, marked red, then every robot restarts)."
+                f"it fell for {FALL_HOLD_S:g} s, ringed in {COLOUR_NAMES[DANGER]}, then every "
+                "robot restarts)."
             )
             self.push_robot = self.writer(gui.add_dropdown("Robot", intent.methods))
             self.push_force = self.writer(

@@ -198,9 +198,14 @@ class LivePlots:
 
     def _make(self, methods: tuple[str, ...]) -> dict[str, Any]:
         handles: dict[str, Any] = {}
+        # each robot's line in its colour and its own dash pattern, its legend entry with its
+        # marker: told apart without colour too
         robots = tuple(
             viser.uplot.Series(
-                label=METHOD_INFO[m].title, stroke=css(METHOD_INFO[m].color), width=2
+                label=METHOD_INFO[m].tag,
+                stroke=css(METHOD_INFO[m].color),
+                width=2,
+                **({"dash": METHOD_INFO[m].dash} if METHOD_INFO[m].dash else {}),
             )
             for m in methods
         )
@@ -240,12 +245,14 @@ class LivePlots:
 
 class HorizonInspector:
     """The chosen robot's plan over the horizon at the shown instant (paper Fig. 5-7), in the
-    scene's colours: predicted / optimised purple and solid, references crimson and dashed,
-    the footstep plan grey."""
+    scene's colours: predicted / optimised sky blue and solid, references indigo and dashed,
+    the footstep plan grey. The robot is chosen by its label (as the legends name it)."""
 
     def __init__(self, gui: Any):
         self.gui = gui
-        self.robot = gui.add_dropdown("Robot", (strategy.MPC,), initial_value=strategy.MPC)
+        mpc = METHOD_INFO[strategy.MPC].title
+        self.robot = gui.add_dropdown("Robot", (mpc,), initial_value=mpc)
+        self._by_title: dict[str, str] = {mpc: strategy.MPC}  # dropdown option -> method
         self.robot.on_update(lambda _e: self._invalidate())
         self.caption = gui.add_markdown("")
         pred, ref, plan = css(PREDICTED), css(REFERENCE), css(PLAN)
@@ -327,11 +334,15 @@ class HorizonInspector:
 
     def update(self, frame: LiveFrame, now: float) -> None:
         methods = tuple(r.method for r in frame.robots)
-        if tuple(self.robot.options) != methods and methods:
-            self.robot.options = methods
-            if self.robot.value not in methods:
-                self.robot.value = strategy.MPC if strategy.MPC in methods else methods[0]
-        r = frame.robot(self.robot.value) if methods else None
+        titles = tuple(METHOD_INFO[m].title for m in methods)
+        if tuple(self.robot.options) != titles and methods:
+            self._by_title = dict(zip(titles, methods, strict=True))
+            self.robot.options = titles
+            if self.robot.value not in titles:
+                first = strategy.MPC if strategy.MPC in methods else methods[0]
+                self.robot.value = METHOD_INFO[first].title
+        method = self._by_title.get(self.robot.value)
+        r = frame.robot(method) if methods and method is not None else None
         if r is None or r.horizon is None:
             return
         key = (frame.seq, r.method)

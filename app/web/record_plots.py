@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from app.live.history import COL
 from app.web.overlays import DANGER
 from app.web.plots import LOG_PLOTS, PLOTS
-from pelvic_walk.core.methods import METHOD_INFO, method_hex
+from pelvic_walk.core.methods import METHOD_INFO
 from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
 if TYPE_CHECKING:
@@ -44,12 +44,15 @@ def plots_png(rec: Recording, dpi: int = 100) -> bytes:
             if rows is None or not len(rows):
                 continue
             x = rows[:, COL["clock"]] - rec.start
+            # its colour, line style and marker (as the live plots: not colour alone)
             ax.plot(
                 x,
                 rows[:, COL[col]],
-                color=method_hex(method),
                 lw=1.6,
+                markersize=4,
+                markevery=max(1, len(x) // 10),
                 label=METHOD_INFO[method].title,
+                **METHOD_INFO[method].mpl_style(),
             )
         rows = rec.rows.get(ref) if ref else None
         if rows is not None and len(rows):

@@ -14,6 +14,28 @@ from pelvic_walk.core.methods import METHOD_INFO
 
 TINTED_GEOMS = ("torso", "head")  # drawn in the robot's method colour
 
+# The scene's light curve: the colour (sRGB 0-255, red/green and blue) a grey mesh of each
+# instance colour (left) shows where it faces the camera, under viser's default lighting
+# (environment map and lights), measured in Chromium (tests/test_browser_colours.py renders
+# and measures again). viser's client takes an instance colour as linear light and lights it
+# brightly: sent as is, grey 128 shows as 210 and every colour but black looks pale (the MPC's
+# orange read yellow, the three torsos were similar light greys in grayscale).
+# :func:`mesh_color` inverts it channel by channel, so a torso shows its method's colour.
+LIGHT_IN = (0, 5, 10, 15, 20, 30, 40, 45, 50, 60, 70, 80, 90, 100, 128, 160, 200, 230, 255)
+LIGHT_RG = (20, 45, 65, 82, 96, 120, 140, 146, 154, 164, 175, 182, 189, 198, 210, 218.5, 226,
+            229, 232)  # fmt: skip
+LIGHT_B = (22, 49, 70, 88, 103, 127, 147, 153, 161, 171, 181, 187, 195, 203, 214, 222, 229,
+           231, 234)  # fmt: skip
+
+
+def mesh_color(rgb: tuple[int, int, int] | np.ndarray) -> np.ndarray:
+    """(3,) uint8: the instance colour that shows as ``rgb`` in the lit scene (a colour out
+    of the light's range, darker than its black or lighter than its white, shows as near it
+    as it can)."""
+    c = np.asarray(rgb, float)
+    out = [np.interp(c[i], LIGHT_B if i == 2 else LIGHT_RG, LIGHT_IN) for i in range(3)]
+    return np.round(out).astype(np.uint8)
+
 
 class RobotMeshes:
     """Every robot as three batched meshes, a unit box, cylinder and sphere scaled per
@@ -77,8 +99,9 @@ class RobotMeshes:
         self.handles = {}
         n = len(methods)
         for kind, (mesh, body, _p, _R, scale, rgb, tint) in self.kinds.items():
+            lit = np.array([mesh_color(c) for c in rgb], np.uint8).reshape(-1, 3)
             colors = np.concatenate(
-                [np.where(tint[:, None], METHOD_INFO[m].color, rgb) for m in methods]
+                [np.where(tint[:, None], mesh_color(METHOD_INFO[m].color), lit) for m in methods]
             ).astype(np.uint8)
             k = len(body) * n
             self.handles[kind] = self.scene.add_batched_meshes_simple(

@@ -20,13 +20,17 @@ the side, at x = (i - (n - 1) / 2) * ``ROBOT_SPACING``, the first one hindmost);
 (robots, overlays, floor) is shifted back in x to the middle of the robots' progress (the
 middle between the hindmost and the foremost), so every robot stays in view, a fallen one
 lying behind the others included, while the footholds and the floor stay fixed to the ground.
-A fallen robot gets a red ring on the floor and a label saying when and why it fell and when
-the session restarts every robot (app.live.session.FALL_HOLD_S).
+A fallen robot gets a vermilion ring on the floor and a label saying when and why it fell and
+when the session restarts every robot (app.live.session.FALL_HOLD_S). A robot its strategy
+stopped (it raised) stays in view too, with its error on its label, until the restart.
+Each label starts with the robot's marker (``MethodInfo.marker``), a cue that is not colour;
+the outermost labels on the screen are anchored at their inner edge, so their text extends
+toward the middle and never out of the frame.
 
 The prediction (the paper's Fig. 5-6), drawn on the floor so the body does not hide it: the
-CoM the CoM MPC predicts over the horizon (eq. 25-26) as a purple path from the robot
-forward, and across it, at every fourth predicted sample, the pelvis's hip line: purple and
-solid for the MPC's optimised angle theta (eq. 35), crimson, dashed and longer for the
+CoM the CoM MPC predicts over the horizon (eq. 25-26) as a sky-blue path from the robot
+forward, and across it, at every fourth predicted sample, the pelvis's hip line: sky blue and
+solid for the MPC's optimised angle theta (eq. 35), indigo, dashed and longer for the
 reference theta_ref (eq. 30-33). Only the MPC robot plans its pelvis; the redundancy robot
 shows its hip line now, the fixed one none.
 """
@@ -59,6 +63,7 @@ from app.web.overlays import (
     Overlay,
     colored,
     fall_ring,
+    line_color,
     polyline_segments,
     reach_color,
     rectangle_segments,
@@ -78,12 +83,12 @@ LAYERS: dict[str, tuple[str, bool]] = {  # key -> (GUI label, shown by default)
     "labels": ("Labels (method, status, numbers)", True),
     "prediction": ("Prediction: CoM path and hip lines (floor)", True),
     "footholds": ("Planned footholds", True),
-    "zmp": ("ZMP: reference (crimson disc) and measured (black dot)", True),
+    "zmp": ("ZMP: reference (indigo disc) and measured (black dot)", True),
     "support": ("Support polygon", False),
     "swing": ("Swing-foot path", False),
     "momentum": ("Yaw momentum arrow", True),
-    "reach": ("Legs by reach (grey -> red: knee straightening)", True),
-    "falls": ("Fall marker (red ring)", True),
+    "reach": ("Legs by reach (grey -> vermilion: knee straightening)", True),
+    "falls": ("Fall marker (vermilion ring)", True),
 }
 MOMENTUM_SCALE = 0.5  # [m per kg m^2/s] arrow length
 OVERLAY_HZ = 10.0  # overlay refreshes per second at most
@@ -141,7 +146,7 @@ class SceneView:
             sc.add_point_cloud(
                 "/world/zmp",
                 np.zeros((1, 3), np.float32),
-                ZMP_REF,
+                line_color(ZMP_REF),
                 point_size=0.05,
                 point_shape="circle",
                 precision="float32",
@@ -151,7 +156,7 @@ class SceneView:
             sc.add_arrows(
                 "/world/momentum",
                 np.zeros((1, 2, 3), np.float32),
-                MOMENTUM,
+                line_color(MOMENTUM),
                 shaft_radius=0.015,
                 head_radius=0.04,
                 head_length=0.08,
@@ -212,23 +217,43 @@ class SceneView:
             client.camera.position = tuple(pos)
             client.camera.look_at = tuple(look)
 
-    def _refit(self, stagger: float) -> None:
+    def _refit(self, stagger: float, moved_from: np.ndarray | None = None) -> None:
         """Fit the named view again for robots ``stagger`` [m] apart along x, for every
         browser whose camera is still where the view put it (one the viewer turned or
-        zoomed is left alone)."""
+        zoomed is left alone); ``moved_from``: where a browser's camera stands that this
+        view has not placed yet (the initial camera before it changed)."""
         self._stagger = stagger
+        initial = self._initial if moved_from is None else moved_from
         clients = (
             list(self.target.get_clients().values())
             if isinstance(self.target, viser.ViserServer)
             else [self.target]
         )
         for client in clients:
-            placed = self._placed.get(client.client_id, self._initial)
+            placed = self._placed.get(client.client_id, initial)
             try:
                 here = np.asarray(client.camera.position, float)
             except AssertionError:  # nothing reported yet
                 continue
             if placed is not None and np.allclose(here, placed, atol=0.05):
+                self.set_camera(self.camera_view, client)
+
+    def _fit_new_browsers(self) -> None:
+        """A browser that joined the shared scene starts at the initial camera, fitted for a
+        canvas of aspect 1.3: once it reports its own canvas there, fit the view to it (a
+        narrow window's canvas cut the outer robots and labels off). One the viewer moved
+        away is left alone."""
+        if not isinstance(self.target, viser.ViserServer):
+            return  # a browser's own scene was fitted to it when it was made
+        for cid, client in self.target.get_clients().items():
+            if cid in self._placed:
+                continue
+            try:
+                here = np.asarray(client.camera.position, float)
+            except AssertionError:  # nothing reported yet: at a later draw
+                continue
+            # (a browser reports a camera of its own before the initial one: wait for that)
+            if self._initial is not None and np.allclose(here, self._initial, atol=0.05):
                 self.set_camera(self.camera_view, client)
 
     @property
@@ -266,9 +291,18 @@ class SceneView:
             )
             for i, m in enumerate(methods)
         ]
+        refit = len(methods) != len(self._methods)
         self._methods = methods
         self._keys.clear()
         self._apply_layers()
+        if refit and methods:  # the views fitted for the number of robots now shown
+            old_initial = self._initial
+            if isinstance(self.target, viser.ViserServer):  # where a new browser starts
+                pos, look, _up, _fov = camera_pose("follow", len(methods), 1.3, False)
+                self.target.initial_camera.position = tuple(pos)
+                self.target.initial_camera.look_at = tuple(look)
+                self._initial = np.asarray(pos, float)
+            self._refit(self._stagger, moved_from=old_initial)
 
     # -- drawing (display thread) ------------------------------------------------------------
     def draw(self, frame: LiveFrame, kept: FrameStore | None = None) -> None:
@@ -292,6 +326,7 @@ class SceneView:
         stagger = stagger_x(robots)
         if stagger != self._stagger:
             self._refit(stagger)
+        self._fit_new_browsers()
         target = follow_x(robots) if self.follow else 0.0
         jump = abs(target - self._follow_x) > 2.0 or frame.paused
         self._follow_x = target if jump else self._follow_x + 0.25 * (target - self._follow_x)
@@ -308,10 +343,12 @@ class SceneView:
                 self.limit_marks.draw(robots, y)
             if labels and self.layers["labels"]:
                 self._label_time = now
-                for r, yi, label in zip(robots, y, self.labels, strict=True):
+                anchors = label_anchors(self.camera_view, y)
+                for r, yi, label, anchor in zip(robots, y, self.labels, anchors, strict=True):
                     label.set(
-                        text=label_text(r, frame),
+                        text=label_text(r, frame, compact=self._stagger >= COMPACT_STAGGER),
                         position=label_point(r.com[0], yi, r.slot, n, self.from_above),
+                        anchor=anchor,
                     )
 
     def _draw_overlays(
@@ -360,10 +397,10 @@ class SceneView:
             for r, yi in zip(robots, y, strict=True):
                 if r.zmp_ref is not None:
                     pts.append((*(r.zmp_ref + yi), FLOOR_Z + 0.01))
-                    cols.append(ZMP_REF)
+                    cols.append(line_color(ZMP_REF))
                 if r.cop is not None:
                     pts.append((*(r.cop + yi), FLOOR_Z + 0.02))
-                    cols.append(ZMP_MEAS)
+                    cols.append(line_color(ZMP_MEAS))
             if pts:
                 ov["zmp"].set(points=np.array(pts, np.float32), colors=np.array(cols, np.uint8))
         if on["swing"]:
@@ -385,7 +422,9 @@ class SceneView:
                     for r, yi in zip(robots, y, strict=True)
                 ]
             )
-            colors = np.array([reach_color(v) for r in robots for v in r.reach], np.uint8)
+            colors = np.array(
+                [line_color(reach_color(v)) for r in robots for v in r.reach], np.uint8
+            )
             ov["reach"].lines(legs.astype(np.float32), np.repeat(colors[:, None, :], 2, axis=1))
         if self.sticks and kept is not None:
             key = tuple((id(r.plan), r.step_index) for r in robots)
@@ -402,18 +441,41 @@ class SceneView:
 
 
 STAGGER_STEP = 0.5  # [m] the cameras are fitted again when the robots' stagger crosses these
+COMPACT_STAGGER = 1.5  # [m] robots this far apart along x: the view zooms out, labels shorten
 
 
 def robot_xs(robots: tuple[RobotFrame, ...]) -> list[float]:
-    """[m] the forward positions the view follows: a walking robot's CoM, a fallen one's
-    middle (it lies there for a few seconds). A robot its strategy stopped stands until the
-    next restart, which may be minutes away: the view leaves it behind (unless all stopped)."""
-    going = [r for r in robots if r.error is None] or list(robots)
+    """[m] the forward positions the view follows, every robot's: a walking robot's CoM, a
+    fallen one's middle (it lies there until the restart), a stopped one's (its strategy
+    raised: it stands with its error on its label until the restart) where it stopped. The
+    view centres between the hindmost and the foremost and is fitted for their stagger, so
+    none leaves the picture."""
     return [
         (float(r.body_xpos[1:, 0].min()) + float(r.body_xpos[1:, 0].max())) / 2
         if r.fell
         else float(r.com[0])
-        for r in going
+        for r in robots
+    ]
+
+
+def label_anchors(view: str, offsets: np.ndarray) -> list[str]:
+    """Each label's anchor in the named view, robots at ``offsets`` (n, 2) [m] in x, y: the
+    leftmost robot on the screen has its label's left edge at its point (the text extends
+    toward the middle), the rightmost its right edge, the others their middle; seen from
+    above (labels beside the robots, in the middle of the screen) every one its middle. A
+    label centred over an outer robot ran out of the frame ("et line ahead · clean")."""
+    n = len(offsets)
+    if n < 2 or view == "top":
+        return ["bottom-center"] * n
+    direction, up, _fov = CAMERA_VIEWS[view]
+    d = np.asarray(direction, float) / np.linalg.norm(direction)
+    u = np.asarray(up, float) - np.dot(up, d) * d
+    right = np.cross(u / np.linalg.norm(u), d)  # the screen's right, as camera_pose
+    xs = np.asarray(offsets, float)[:, :2] @ right[:2]
+    lo, hi = int(np.argmin(xs)), int(np.argmax(xs))
+    return [
+        "bottom-left" if i == lo else "bottom-right" if i == hi else "bottom-center"
+        for i in range(n)
     ]
 
 
@@ -464,15 +526,21 @@ def wrap(text: str, width: int = 48) -> str:
     return "\n".join(textwrap.wrap(text, width)) or text
 
 
-def label_text(r: RobotFrame, frame: LiveFrame) -> str:
+def label_text(r: RobotFrame, frame: LiveFrame, compact: bool = False) -> str:
     """Method, status badge and live numbers, above the robot; when it fell, when and why,
-    and when the session restarts every robot."""
-    head = METHOD_INFO[r.method].title
+    and when the session restarts every robot. ``compact``: the robots are far apart along
+    x (one stopped or fallen behind, the view zoomed out) and their labels crowd: a walking
+    robot's label is its first line, a stopped or fallen one's says what happened without
+    the restart line (the status area says it all)."""
+    head = METHOD_INFO[r.method].tag  # its marker and title: "■ fixed pelvis"
     if r.error is not None:
-        return f"⚠ {head} STOPPED\n{wrap(r.error)}\nRestart all robots together runs it again"
+        rest = "" if compact else "\nRestart all robots together runs it again"
+        return f"⚠ {head} STOPPED\n{wrap(r.error, 40 if compact else 48)}{rest}"
     if r.fell:
         when, why, restart = fall_note(r, frame)
-        return f"⚠ {head} FELL {when}\n{why}\n{restart}"
+        return f"⚠ {head} FELL {when}\n{why}" + ("" if compact else f"\n{restart}")
+    if compact:
+        return f"{head} · {r.status}"
     if r.waiting:
         return f"{head}\nstanding by to start in phase"
     if r.finished and r.unsuccessful:  # the reasons one a line

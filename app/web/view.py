@@ -46,7 +46,7 @@ from app.web.auth import (
     client_instructor,
     client_seat,
 )
-from app.web.panel import ControlPanel
+from app.web.panel import A11Y_STYLE, THEME, ControlPanel
 from app.web.scene import SceneView
 from models.dyros_jet import SCENE_XML
 
@@ -122,7 +122,8 @@ class NoticeOnly:
 
     def __init__(self, client: Any, notice: str):
         self.target = client
-        client.gui.configure_theme(dark_mode=False, show_logo=False, show_share_button=False)
+        client.gui.configure_theme(**THEME)
+        client.gui.add_html(A11Y_STYLE)
         self.notice = client.gui.add_markdown(notice)
 
     def draw(self, now: float) -> None:

@@ -31,7 +31,7 @@ from app.live.registry import usable_credential
 from app.live.session import FALL_HOLD_S
 from app.web.api.edges import file_under, router
 from app.web.auth import INSTRUCTOR_COOKIE, SEAT_COOKIE, TOKEN_PARAM, Instructor, new_credential
-from app.web.overlays import MEASURED, PREDICTED, REFERENCE
+from app.web.overlays import COLOUR_NAMES, DANGER, MEASURED, PLAN, PREDICTED, REFERENCE
 from app.web.report_page import render_report_page
 from controller import strategy
 from pelvic_walk.core.methods import METHOD_INFO
@@ -46,6 +46,13 @@ COLOURS = {  # {{COLOR_<name>}} in the page: the scene's colours, from their one
     "predicted": PREDICTED,
     "reference": REFERENCE,
     "measured": MEASURED,
+    "plan": PLAN,
+    "danger": DANGER,
+}
+# {{NAME_<meaning>}}: the words for the overlay colours; {{MARK_<method>}}: a robot's marker
+WORDS = {
+    **{f"NAME_{k}": COLOUR_NAMES[v] for k, v in COLOURS.items() if v in COLOUR_NAMES},
+    **{f"MARK_{m}": METHOD_INFO[m].marker for m in strategy.BUILTINS},
 }
 
 
@@ -59,7 +66,8 @@ def own_robots_html() -> str:
         file = os.path.basename(i.file or "")
         items.append(
             '<li><span class="swatch" style="background:rgb({},{},{})"></span>'.format(*i.color)
-            + f"<b>{html.escape(i.label)}</b> (a strategy of your own, "
+            + f"<b>{html.escape(METHOD_INFO[name].marker)} {html.escape(i.label)}</b> (a "
+            "strategy of your own, "
             f"<code>{html.escape(file)}</code>): {html.escape(i.description or name)}</li>"
         )
     return "\n      ".join(items)
@@ -148,6 +156,8 @@ def pages_router(
         page = page.replace("{{SHARED_LABEL}}", shared_label)
         for name, rgb in COLOURS.items():
             page = page.replace(f"{{{{COLOR_{name}}}}}", "rgb({},{},{})".format(*rgb))
+        for key, words in WORDS.items():
+            page = page.replace(f"{{{{{key}}}}}", html.escape(words))
         response = HTMLResponse(page, headers={"Cache-Control": "no-store"})
         if private and usable_credential(request.cookies.get(SEAT_COOKIE)) is None:
             # the browser's credential for its own session: HttpOnly (no script reads it),
