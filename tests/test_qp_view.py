@@ -65,3 +65,32 @@ def test_lessons_1_and_6_show_the_active_constraints():
     for title in ("1. ", "6. "):
         lesson = next(x for x in LESSONS if x.title.startswith(title))
         assert "active" in lesson.numbers and "what stops the IK" in lesson.watch
+
+
+def test_the_view_shows_the_robot_the_dropdown_names_and_follows_a_new_choice(fixed_042):
+    """The Inspect tab's dropdown names robots by their label; the QP view draws the chosen
+    robot's explanation, and a new choice is drawn at once from the last frame (paused, no new
+    frame comes to draw it)."""
+    import dataclasses
+
+    import viser
+
+    from app.bench.local_server import free_port
+    from app.web.plots import HorizonInspector
+    from app.web.qp_view import QpView
+    from pelvic_walk.core.methods import METHOD_INFO
+
+    frame = _knee_frames(fixed_042)[0]
+    mpc = dataclasses.replace(frame.robots[0], method="mpc", qp=None)
+    frame = dataclasses.replace(frame, robots=(mpc, frame.robots[0]), paused=True)
+    server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
+    try:
+        inspector = HorizonInspector(server.gui)
+        view = QpView(server.gui, inspector)
+        inspector.update(frame, 0.0)
+        view.update(frame, 0.0, paused=True)
+        assert 'data-layer="ik"' not in view.html.content  # the MPC robot, no record
+        inspector.robot.value = METHOD_INFO["fixed"].title  # fires the dropdown's callback
+        assert 'data-layer="ik"' in view.html.content and "knee" in view.html.content
+    finally:
+        server.stop()

@@ -135,7 +135,7 @@ class ControlPanel:
             self._build_controls()
         with tabs.add_tab("Inspect", viser.Icon.CHART_LINE):
             self.inspector = HorizonInspector(gui)
-            self.qp_view = QpView(gui, self.inspector.robot)
+            self.qp_view = QpView(gui, self.inspector)
         with tabs.add_tab("Plots", viser.Icon.CHART_DOTS):
             self.plots = LivePlots(gui, view.session)
         with tabs.add_tab("Learn", viser.Icon.SCHOOL):

@@ -253,7 +253,8 @@ class HorizonInspector:
         mpc = METHOD_INFO[strategy.MPC].title
         self.robot = gui.add_dropdown("Robot", (mpc,), initial_value=mpc)
         self._by_title: dict[str, str] = {mpc: strategy.MPC}  # dropdown option -> method
-        self.robot.on_update(lambda _e: self._invalidate())
+        self._shown: tuple[LiveFrame, float] | None = None  # the last frame, for a redraw
+        self.robot.on_update(lambda _e: self._reselected())
         self.caption = gui.add_markdown("")
         pred, ref, plan = css(PREDICTED), css(REFERENCE), css(PLAN)
         x_axis = viser.uplot.Series(label="t from now [s]")
@@ -314,6 +315,17 @@ class HorizonInspector:
     def _invalidate(self) -> None:
         self._key = None
 
+    def _reselected(self) -> None:
+        """Another robot chosen: draw it at once from the last frame (paused, no new frame
+        may come to draw it)."""
+        self._invalidate()
+        if self._shown is not None:
+            self.update(*self._shown)
+
+    def selected(self) -> str | None:
+        """The method of the robot the dropdown names (by its label)."""
+        return self._by_title.get(self.robot.value)
+
     def _scale(
         self,
         handle: Any,
@@ -333,6 +345,7 @@ class HorizonInspector:
             }
 
     def update(self, frame: LiveFrame, now: float) -> None:
+        self._shown = (frame, now)
         methods = tuple(r.method for r in frame.robots)
         titles = tuple(METHOD_INFO[m].title for m in methods)
         if tuple(self.robot.options) != titles and methods:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import html
 import math
+import threading
 from typing import Any
 
 from controller.explain import ACTIVE_SET_MEANING, QpExplain, TickExplain
@@ -88,27 +89,41 @@ class QpView:
     """The QP view's GUI element; :meth:`update` with each shown frame and the robot chosen
     in the horizon inspector's dropdown."""
 
-    def __init__(self, gui: Any, robot: Any):
-        self.robot = robot  # the inspector's dropdown: one choice of robot for the tab
+    def __init__(self, gui: Any, inspector: Any):
+        # the horizon inspector: its dropdown chooses the tab's robot (by its label), and
+        # ``inspector.selected()`` names that robot's method
+        self.inspector = inspector
         with gui.add_folder("QP: what stops each optimisation"):
             self.html = gui.add_html(qp_html(None, 0.0))
         self._key: tuple | None = None
         self._time = -math.inf
+        self._shown: tuple[LiveFrame, float, bool | None] | None = None
+        self._lock = threading.Lock()  # the display thread and the dropdown's callback draw
+        inspector.robot.on_update(lambda _e: self._reselected())
+
+    def _reselected(self) -> None:
+        """Another robot chosen: draw it at once from the last frame (paused, no new frame
+        may come to draw it)."""
+        if self._shown is not None:
+            self.update(*self._shown)
 
     def update(self, frame: LiveFrame, now: float, paused: bool | None = None) -> None:
         """Show ``frame``'s explanation for the chosen robot. ``paused``: the session is
         paused (the intent's word: a kept frame shown after a seek was made while running,
         so its own ``paused`` says nothing of now); paused, every shown frame is drawn at
         once, running, at most :data:`QP_VIEW_HZ` a second."""
-        r = frame.robot(self.robot.value)
-        key = (frame.seq, self.robot.value)
-        if key == self._key:
-            return
-        paused = frame.paused if paused is None else paused
-        same_robot = self._key is not None and key[1] == self._key[1]
-        if same_robot and not paused and now - self._time < 1.0 / QP_VIEW_HZ:
-            return
-        self._key, self._time = key, now
-        content = qp_html(r, frame.clock)
-        if self.html.content != content:
-            self.html.content = content
+        with self._lock:
+            self._shown = (frame, now, paused)
+            method = self.inspector.selected()
+            r = frame.robot(method) if method is not None else None
+            key = (frame.seq, method)
+            if key == self._key:
+                return
+            paused = frame.paused if paused is None else paused
+            same_robot = self._key is not None and key[1] == self._key[1]
+            if same_robot and not paused and now - self._time < 1.0 / QP_VIEW_HZ:
+                return
+            self._key, self._time = key, now
+            content = qp_html(r, frame.clock)
+            if self.html.content != content:
+                self.html.content = content
