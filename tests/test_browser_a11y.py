@@ -1,4 +1,5 @@
-"""Accessibility of the page and the scene's panel (issue 45, item 2), checked by axe-core in
+"""Accessibility of the page and the scene's panel (docs/TEACHING.md, "Accessibility"), checked by
+axe-core in
 Chromium (axe-playwright-python bundles it), the keyboard path, a visible focus and the layout
 of an 800 px window.
 

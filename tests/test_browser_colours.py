@@ -1,4 +1,4 @@
-"""The robots' and the overlays' colours as Chromium renders them (issue 45, item 1).
+"""The robots' and the overlays' colours as Chromium renders them (docs/TEACHING.md, "Colours").
 
 viser's client lights an instance colour brightly (grey 128 showed as 210, the MPC's orange as
 yellow), so the colours a student sees are not the ones sent. Here each robot's torso colour

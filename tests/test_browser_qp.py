@@ -1,4 +1,4 @@
-"""Real-browser test of the Inspect tab's QP view (issue 42): the four layers side by side for
+"""Real-browser test of the Inspect tab's QP view: the four layers side by side for
 the chosen robot, following a seek while paused (the instant ``GET /api/qp`` explains).
 
 Screenshots go to ``tests/artifacts/`` (looked at by people; nothing asserts on pixels).

@@ -1,4 +1,4 @@
-"""Colours every student tells apart, and cues that are not colour (issue 45, item 1).
+"""Colours every student tells apart, and cues that are not colour (docs/TEACHING.md, "Colours").
 
 The scene is drawn (a :class:`~app.web.scene.SceneView` on a viser server, no browser) with the
 paper's three robots and two of a student's own strategies (the palette's colours); the

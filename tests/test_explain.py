@@ -1,4 +1,4 @@
-"""The QP inspector (issue 42): each layer explains its solve (controller/explain.py)."""
+"""The QP inspector: each layer explains its solve (controller/explain.py)."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""The QP inspector's faces without a browser (issue 42): the Inspect tab's HTML, the joint
+"""The QP inspector's faces without a browser: the Inspect tab's HTML, the joint
 marks on the robot, the touched ZMP bounds on the horizon strip, the lessons' row, Run.qp."""
 
 from __future__ import annotations

@@ -445,7 +445,7 @@ def test_no_two_slider_marks_share_a_place_and_presets_read_whole(panel_view):
     assert axis["values"][-1] == "" and axis["values"][-2] == "1e3"
 
 
-# -- issue 45: labels inside the frame, stopped robots in view --------------------------------
+# -- labels inside the frame, stopped robots in view --------------------------------
 LABEL_W = 280.0  # [px] the widest label line (48 characters of a wrapped error, 13 px font)
 
 

@@ -14,7 +14,7 @@ hands back its two ends, commands in and frames out. Both engines run the same w
   and no message is in flight, so frames relate exactly to simulated time however busy
   the machine is (the loops never fall behind, as on an idle machine).
 
-(Issue 43 adds a Ray engine behind the same three calls: ``start``, ``loop`` and the
+(A Ray engine would go behind the same three calls: ``start``, ``loop`` and the
 ``clock`` and ``start_delay`` the sessions read.)
 """
 

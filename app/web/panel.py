@@ -57,7 +57,7 @@ DISABLED_SLIDER_STYLE = (  # (Mantine marks a disabled slider's track, not its r
     "<style>.mantine-Slider-root:has(.mantine-Slider-trackContainer[data-disabled])"
     " ~ .mantine-NumberInput-root{opacity:.45;pointer-events:none}</style>"
 )
-# Named and seen by everyone (issue 45; docs/TEACHING.md, "Accessibility"): viser's default blue
+# Named and seen by everyone (docs/TEACHING.md, "Accessibility"): viser's default blue
 # (#228be6) under white button text, as outline buttons' text, and Mantine's grey "dimmed"
 # labels (#868e96) are below 4.5:1 on white. A darker brand colour (its buttons' shade
 # #1c63d5: 5.5:1) and darker dimmed text (#495057: 8.2:1) through the theme's CSS variables;

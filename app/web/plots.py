@@ -282,7 +282,7 @@ class HorizonInspector:
                 viser.uplot.Series(label="ZMP reference", stroke=ref, width=1.5, dash=(6, 4)),
                 viser.uplot.Series(label="min", stroke=plan, width=1),
                 viser.uplot.Series(label="max", stroke=plan, width=1),
-                # the CoM MPC's active ZMP bounds (issue 42: the QP view names them)
+                # the CoM MPC's active ZMP bounds (the QP view names them)
                 viser.uplot.Series(
                     label="bound touched (active)",
                     stroke=css(DANGER),

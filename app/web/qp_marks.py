@@ -1,4 +1,4 @@
-"""Where the QP inspector's constraints have a place in the 3-D scene (issue 42): a joint the
+"""Where the QP inspector's constraints have a place in the 3-D scene: a joint the
 IK or the arm QP holds at its angle limit is marked on the robot, a red dot at the joint.
 
 Self-contained: the scene makes one :class:`LimitMarks` and draws it with its overlays; the

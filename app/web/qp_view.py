@@ -1,5 +1,5 @@
 """The QP view of the Inspect tab: what each of the selected robot's four optimisations did at
-the shown instant, side by side (issue 42; the record is :class:`controller.explain.TickExplain`,
+the shown instant, side by side (the record is :class:`controller.explain.TickExplain`,
 made with the frame, so it follows pause and scrub like the horizon inspector).
 
 Pure HTML from a frame (:func:`qp_html`, tested without a browser) and a small GUI holder

@@ -163,7 +163,7 @@ class SceneView:
             )
         )
         self.ov["sticks"].handle.visible = False
-        self.limit_marks = LimitMarks(sc, model)  # joints the IK holds at a limit (issue 42)
+        self.limit_marks = LimitMarks(sc, model)  # joints the IK holds at a limit (QP inspector)
         self.labels: list[Overlay] = []
         self._methods: tuple[str, ...] = ()
         self._overlay_time = self._label_time = -math.inf

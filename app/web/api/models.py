@@ -304,7 +304,7 @@ class QpLayer(BaseModel):
 
 
 class QpResponse(BaseModel):
-    """The four layers' optimisations of one robot at the shown instant (issue 42)."""
+    """The four layers' optimisations of one robot at the shown instant (the QP inspector)."""
 
     session: str
     method: str
