@@ -41,7 +41,7 @@ class AblationRow:
 
     method: str
     label: str
-    role: str  # "paper" (fixed, mpc), "example" (examples/), "yours" (--strategy)
+    role: str  # "paper" (fixed, redundancy, mpc), "example" (examples/), "yours" (--strategy)
     source: str | None  # the strategy's file (None: a built-in)
     longest_clean: float | None  # [m]
     first_failed: float | None  # [m]
