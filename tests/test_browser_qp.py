@@ -49,8 +49,15 @@ def test_the_qp_view_follows_a_seek(tool, browser):
         open_tab(scene, "Inspect")
         view = scene.locator(".qp-view[data-method]").first
         view.wait_for(state="attached", timeout=120_000)
-        for layer in ("com_mpc", "pelvis_mpc", "ik", "arm_swing"):
-            assert scene.locator(f'.qp-view [data-layer="{layer}"]').count() == 1
+        # the robots just rebuilt (new methods) show no record until their first tick is drawn
+        wait_until(
+            lambda: all(
+                scene.locator(f'.qp-view [data-layer="{layer}"]').count() == 1
+                for layer in ("com_mpc", "pelvis_mpc", "ik", "arm_swing")
+            ),
+            "the four layers in the QP view",
+            120,
+        )
         assert "What stops each optimisation" in view.inner_text()
         wait_until(
             lambda: (k := get(base, "state")["kept"]) and k["end"] - k["start"] > 4.0,
