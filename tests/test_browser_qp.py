@@ -70,9 +70,11 @@ def test_the_qp_view_follows_a_seek(tool, browser):
             post(base, "sim/seek", {"t": target})
 
             def same_tick(target: float = target) -> dict | None:
-                # the API's record of the shown instant and the view's, read together: a seek
-                # on a busy machine may be applied after the first read of either
-                qp = get(base, "qp?method=mpc")
+                # the robot the view shows (the Inspect tab's choice: the MPC's unless the
+                # client chose another) and the API's record of it at the shown instant, read
+                # together: a seek on a busy machine may be applied after the first read
+                method = scene.locator(".qp-view[data-method]").first.get_attribute("data-method")
+                qp = get(base, f"qp?method={method}")
                 shown = scene.locator(f'.qp-view[data-t="{qp["t"]:.3f}"]').count() == 1
                 return qp if shown and abs(qp["clock"] - target) < 0.1 else None
 
