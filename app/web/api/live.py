@@ -39,7 +39,7 @@ from app.web.api.models import (
 )
 from app.web.auth import BEARER, INSTRUCTOR_COOKIE, Instructor
 from controller import strategy
-from pelvic_walk.core.frames import LiveFrame
+from pelvic_walk.core.frames import LiveFrame, RobotFrame
 
 # How long a handler waits for the loop to take its intent before answering anyway (a
 # playback answer then says "applied": false): well under the 5 s clients often default to
@@ -113,13 +113,20 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
     )
 
 
-def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
-    """``GET /api/horizon``: one robot's plan over the horizon at the shown instant."""
+def _shown_robot(session: SessionView, method: str | None) -> tuple[LiveFrame, RobotFrame]:
+    """The shown frame and its robot ``method`` (the MPC's, else the first, by default); 422
+    naming the robots shown when there is no such robot."""
     frame = _shown(session)
-    shown = [r.method for r in frame.robots]
     robot = frame.robot(method) if method else (frame.robot(strategy.MPC) or frame.robots[0])
     if robot is None:
-        raise unprocessable(f"no robot {method!r} is shown (robots: {', '.join(shown)})")
+        shown = ", ".join(r.method for r in frame.robots)
+        raise unprocessable(f"no robot {method!r} is shown (robots: {shown})")
+    return frame, robot
+
+
+def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
+    """``GET /api/horizon``: one robot's plan over the horizon at the shown instant."""
+    frame, robot = _shown_robot(session, method)
     h = robot.horizon
     if h is None:
         raise conflict("the robot has not ticked since it (re)started: resume or step first")
@@ -139,11 +146,7 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
 
 def qp_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
     """``GET /api/qp``: what one robot's four QPs did at the shown instant."""
-    frame = _shown(session)
-    shown = [r.method for r in frame.robots]
-    robot = frame.robot(method) if method else (frame.robot(strategy.MPC) or frame.robots[0])
-    if robot is None:
-        raise unprocessable(f"no robot {method!r} is shown (robots: {', '.join(shown)})")
+    frame, robot = _shown_robot(session, method)
     rec = robot.qp
     if rec is None:
         raise conflict(
