@@ -288,8 +288,11 @@ def test_a_faulty_robot_stops_alone_and_the_others_walk_on(user_file):
     sim = pool.open(initial_intent(params, ["mpc", "raises"], speed=4.0))
     with TestClient(create_app(sim)) as client:
         try:
-            f = sim.wait_frame(timeout=60)
-            while f is not None and f.robot("mpc").t < 1.0 + FALL_HOLD_S + 1.0:
+            # one part per robot: the first merged frames may show only the part that sent one
+            f = sim.wait_applied(sim.intent, timeout=60)
+            while f is not None and (
+                (m := f.robot("mpc")) is None or m.t < 1.0 + FALL_HOLD_S + 1.0
+            ):
                 f = sim.wait_frame(f.seq, timeout=60)
             assert f is not None
             bad, mpc = f.robot("raises"), f.robot("mpc")
