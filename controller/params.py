@@ -54,6 +54,61 @@ def _w(default: float, lo: float, hi: float, label: str, log_min: float, **kw: A
     return _f(default, lo, hi, log_min, "", label, log=True, log_min=log_min, **kw)
 
 
+def param(
+    default: Any,
+    *,
+    min: float | None = None,  # noqa: A002 - the names a strategy's author writes
+    max: float | None = None,  # noqa: A002
+    step: float | None = None,
+    unit: str = "",
+    label: str = "",
+    help: str = "",  # noqa: A002
+    choices: tuple[str, ...] | None = None,
+    log: bool = False,
+    log_min: float | None = None,
+) -> Any:
+    """A field of a strategy's own ``Params`` dataclass (docs/STRATEGIES.md), with the same
+    metadata as the paper's parameters below: it then has a slider, ``--set NAME.FIELD=V``,
+    an API entry and a sweep grid, and its range is checked everywhere.
+
+    A number needs ``min`` and ``max``; a text field ``choices``; a bool neither.
+    """
+    meta: dict[str, Any] = {"label": label or "", "unit": unit}
+    if help:
+        meta["help"] = help
+    if isinstance(default, bool):
+        pass
+    elif isinstance(default, str):
+        if not choices or default not in choices:
+            raise ValueError(f"param({default!r}): a text parameter needs choices holding it")
+        meta["choices"] = tuple(choices)
+    elif isinstance(default, (int, float)):
+        if min is None or max is None or not (min <= default <= max):
+            raise ValueError(f"param({default!r}): a number needs min <= default <= max")
+        span = float(max) - float(min)
+        if step is None:
+            step = 1 if isinstance(default, int) else float(f"{span / 100:.1g}") or span / 100
+        meta.update(min=min, max=max, step=step)
+        if log:
+            meta.update(log=True, log_min=log_min if log_min is not None else step)
+    else:
+        raise ValueError(f"param({default!r}): a number, a bool or a text with choices")
+    return field(default=default, metadata=meta)
+
+
+# A strategy's own parameters (its nested ``Params`` dataclass), by strategy name; and the
+# names under a strategy for parameters of the paper it alone reads (``mpc.k_pel`` ->
+# ``pelvis.k_pel``). Filled by controller/strategy.py's registry; read by :func:`validate`
+# and :meth:`ControllerParams.replace`. Their values ride in ``ControllerParams.own``.
+OWN_PARAMS: dict[str, type] = {}
+ALIASES: dict[str, str] = {}
+
+
+def resolve(dotted: str) -> str:
+    """A parameter's stored name: an alias (``mpc.alpha``) gives the paper's (``pelvis.alpha``)."""
+    return ALIASES.get(dotted, dotted)
+
+
 @dataclass(frozen=True)
 class WalkParams:
     """Footstep plan and swing-foot shape (layer 1, eq. 20-21)."""
@@ -207,6 +262,9 @@ class ControllerParams:
     ik: IkParams = field(default_factory=IkParams)
     arms: ArmParams = field(default_factory=ArmParams)
     control_dt: float = CONTROL_DT  # [s] 200 Hz, fixed by the paper
+    # strategies' own parameters set away from their defaults: ("NAME.FIELD", value), sorted
+    # (a strategy reads its own as ``self.params``: :meth:`own_params`)
+    own: tuple[tuple[str, Any], ...] = ()
 
     def validated(self) -> ControllerParams:
         """Return self after checking every field against its range; raise ValueError."""
@@ -214,14 +272,63 @@ class ControllerParams:
         return self
 
     def replace(self, **groups: Any) -> ControllerParams:
-        """Copy with some groups replaced, e.g. ``p.replace(walk=dict(step_length=0.3))``."""
+        """Copy with some groups replaced, e.g. ``p.replace(walk=dict(step_length=0.3))``.
+
+        A strategy's name is a group too: ``p.replace(gain={"k": 12})`` sets its own
+        parameter ``gain.k``; a name under a strategy for a paper parameter it owns
+        (``mpc={"alpha": 2}``) sets the paper's (``pelvis.alpha``)."""
         changes: dict[str, Any] = {}
+        own = dict(self.own)
+        values: dict[str, Any] = {}
         for name, value in groups.items():
-            if isinstance(value, dict):
-                changes[name] = dataclasses.replace(getattr(self, name), **value)
+            if name in GROUPS and isinstance(value, dict):
+                values.update({f"{name}.{k}": v for k, v in value.items()})
+            elif isinstance(value, dict):  # a strategy's group
+                values.update({f"{name}.{k}": v for k, v in value.items()})
             else:
                 changes[name] = value
+        if "own" in changes:
+            own = dict(changes.pop("own"))
+        grouped: dict[str, dict[str, Any]] = {}
+        for dotted, value in values.items():
+            group, _, fname = resolve(dotted).partition(".")
+            if group in GROUPS:
+                grouped.setdefault(group, {})[fname] = value
+            else:
+                if group not in OWN_PARAMS:
+                    known = ", ".join((*GROUPS, *OWN_PARAMS))
+                    raise ValueError(f"unknown parameter group {group!r} (one of: {known})")
+                own[f"{group}.{fname}"] = value
+        for group, value in grouped.items():
+            base = changes.get(group, getattr(self, group))
+            try:
+                changes[group] = dataclasses.replace(base, **value)
+            except TypeError:
+                bad = next(k for k in value if k not in {f.name for f in dataclasses.fields(base)})
+                raise ValueError(f"unknown parameter {group}.{bad}") from None
+        changes["own"] = _own_tuple(own)
         return dataclasses.replace(self, **changes).validated()
+
+    def value(self, dotted: str) -> Any:
+        """One parameter's value by name (``walk.step_length``, ``gain.k``, ``mpc.alpha``)."""
+        group, _, fname = resolve(dotted).partition(".")
+        if group in GROUPS:
+            return getattr(getattr(self, group), fname)
+        own = dict(self.own)
+        if f"{group}.{fname}" in own:
+            return own[f"{group}.{fname}"]
+        cls = OWN_PARAMS.get(group)
+        if cls is None or fname not in spec(cls):
+            raise ValueError(f"unknown parameter {dotted!r}")
+        return spec(cls)[fname]["default"]
+
+    def own_params(self, strategy: str) -> Any:
+        """A strategy's ``Params`` instance with the values in force (None without one)."""
+        cls = OWN_PARAMS.get(strategy)
+        if cls is None:
+            return None
+        prefix = f"{strategy}."
+        return cls(**{k[len(prefix) :]: v for k, v in self.own if k.startswith(prefix)})
 
 
 GROUPS: tuple[str, ...] = ("walk", "com", "pelvis", "ik", "arms")
@@ -271,6 +378,21 @@ def check_value(group: str, name: str, value: Any, meta: dict[str, Any]) -> None
         raise ValueError(f"{where} must be an integer, got {value!r}")
 
 
+def _own_tuple(own: dict[str, Any]) -> tuple[tuple[str, Any], ...]:
+    """Strategies' own values, sorted, defaults left out (equal settings compare equal)."""
+    out = []
+    for dotted, value in sorted(own.items()):
+        group, _, fname = dotted.partition(".")
+        cls = OWN_PARAMS.get(group)
+        meta = spec(cls).get(fname) if cls is not None else None
+        if meta is not None and isinstance(meta["default"], float) and type(value) is int:
+            value = float(value)  # 12 for a float field: 12.0, as the paper's fields keep it
+        if meta is not None and value == meta["default"] and type(value) is type(meta["default"]):
+            continue
+        out.append((dotted, value))
+    return tuple(out)
+
+
 def validate(p: ControllerParams) -> None:
     """Check every field of every group against its range; raise ValueError on the first bad."""
     if not isinstance(p.method, str) or not p.method:
@@ -279,6 +401,22 @@ def validate(p: ControllerParams) -> None:
         obj = getattr(p, group)
         for name, meta in spec(obj).items():
             check_value(group, name, getattr(obj, name), meta)
+    if not isinstance(p.own, tuple):
+        raise ValueError(f"own must be a tuple of (NAME.FIELD, value), got {p.own!r}")
+    for item in p.own:
+        if not (isinstance(item, tuple) and len(item) == 2 and isinstance(item[0], str)):
+            raise ValueError(f"own must be a tuple of (NAME.FIELD, value), got {item!r}")
+        group, _, fname = item[0].partition(".")
+        cls = OWN_PARAMS.get(group)
+        if cls is None:
+            raise ValueError(f"unknown parameter {item[0]!r}: no strategy {group!r} has parameters")
+        fields_ = spec(cls)
+        if fname not in fields_:
+            raise ValueError(
+                f"unknown parameter {item[0]!r} (one of: "
+                f"{', '.join(f'{group}.{n}' for n in fields_)})"
+            )
+        check_value(group, fname, item[1], fields_[fname])
     if p.com.horizon < p.com.sample_time:
         raise ValueError(
             f"com.horizon = {p.com.horizon} s is shorter than one MPC sample "

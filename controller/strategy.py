@@ -30,6 +30,7 @@ Paper symbols -> names (:class:`StrategyInputs`):
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import importlib.util
 import inspect
@@ -43,7 +44,15 @@ from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 
-from controller.params import ControllerParams, horizon_samples
+from controller.params import (
+    ALIASES,
+    GROUPS,
+    OWN_PARAMS,
+    ControllerParams,
+    check_value,
+    horizon_samples,
+    spec,
+)
 from controller.pelvis_mpc import PelvisMpc, PelvisPlan
 
 FIXED, REDUNDANCY, MPC = "fixed", "redundancy", "mpc"  # the paper's three methods
@@ -95,6 +104,14 @@ class PelvisStrategy:
     """
 
     name: ClassVar[str] = ""
+    # its own parameters (optional): a dataclass whose fields are made by
+    # ``pelvic_walk.param(...)``; the instance reads the values in force as ``self.params``
+    # (set before :meth:`reset` and whenever they change, acting on the next tick)
+    Params: ClassVar[type | None] = None
+    # the paper's parameters this strategy alone reads, under its own name: field -> the
+    # paper's ``group.name`` (the built-in MPC's weights); ``NAME.FIELD`` then names them too
+    owns: ClassVar[dict[str, str]] = {}
+    params: Any = None
     label: ClassVar[str] = ""
     paper_label: ClassVar[str] = ""  # the built-ins: how the paper names them (figures)
     color: ClassVar[tuple[int, int, int] | None] = None
@@ -132,6 +149,7 @@ class RedundancyPelvis(PelvisStrategy):
     prediction; the damping spreads motion onto it in the swing, a small pull brings it back."""
 
     name = REDUNDANCY
+    owns: ClassVar[dict[str, str]] = {"weight": "ik.redundancy_weight"}
     label = "redundancy"
     paper_label = "rotation by redundancy [21]"
     color = (100, 40, 85)  # plum, dark
@@ -150,6 +168,12 @@ class PelvisMpcStrategy(PelvisStrategy):
     """
 
     name = MPC
+    owns: ClassVar[dict[str, str]] = {
+        "alpha": "pelvis.alpha",
+        "beta": "pelvis.beta",
+        "angle_limit_deg": "pelvis.angle_limit_deg",
+        "acc_limit": "pelvis.acc_limit",
+    }
     label = "pelvic MPC"
     paper_label = "rotation by MPC (proposed)"
     color = (230, 140, 0)  # orange (Okabe-Ito's, a shade deeper: apart from yellow as lit)
@@ -301,11 +325,68 @@ def register(
         worn = {i.color for i in _REGISTRY.values() if i.name != name}
         free = [c for c in PALETTE if c not in worn]
         color = free[0] if free else PALETTE[len(_REGISTRY) % len(PALETTE)]
+    own = _check_params(cls, where)
+    owns = _check_owns(cls, where)
     label = cls.label if isinstance(cls.label, str) and cls.label.strip() else name
     paper_label = cls.paper_label if isinstance(cls.paper_label, str) and cls.paper_label else label
     info = StrategyInfo(name, label, paper_label, color, _description(cls), builtin, source, cls)
     _REGISTRY[name] = info
+    _forget_params(name)
+    if own is not None:
+        OWN_PARAMS[name] = own
+    ALIASES.update({f"{name}.{k}": v for k, v in owns.items()})
     return info
+
+
+def _check_params(cls: type[PelvisStrategy], where: str) -> type | None:
+    """The class's ``Params``, checked: a dataclass whose every field has its metadata
+    (made by ``pelvic_walk.param``) and a default in its range."""
+    own = cls.__dict__.get("Params", None)
+    if own is None:
+        return None
+    if not dataclasses.is_dataclass(own) or not isinstance(own, type):
+        raise ValueError(f"{where}: Params must be a dataclass (@dataclass(frozen=True))")
+    for f in dataclasses.fields(own):
+        if "label" not in f.metadata:
+            raise ValueError(
+                f"{where}: Params.{f.name} must be made by pelvic_walk.param(default, min=, max=)"
+            )
+    try:
+        instance = own()
+        for fname, meta in spec(own).items():
+            check_value(cls.name, fname, getattr(instance, fname), meta)
+        hash(instance)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{where}: Params: {exc}") from None
+    return own
+
+
+def _check_owns(cls: type[PelvisStrategy], where: str) -> dict[str, str]:
+    owns = cls.__dict__.get("owns", {})
+    if not isinstance(owns, dict):
+        raise ValueError(f"{where}: owns must map field names to the paper's GROUP.NAME")
+    defaults = ControllerParams()
+    for k, dotted in owns.items():
+        group, _, fname = str(dotted).partition(".")
+        if group not in GROUPS or not hasattr(getattr(defaults, group), fname):
+            raise ValueError(f"{where}: owns[{k!r}] = {dotted!r} is not a paper parameter")
+    return dict(owns)
+
+
+def _forget_params(name: str) -> None:
+    OWN_PARAMS.pop(name, None)
+    for alias in [a for a in ALIASES if a.startswith(f"{name}.")]:
+        del ALIASES[alias]
+
+
+def own_fields(name: str) -> dict[str, str]:
+    """The parameters strategy ``name`` owns, ``NAME.FIELD`` -> the stored name (itself for
+    a field of its ``Params``, the paper's ``group.name`` for one it owns of the paper's)."""
+    out = {a: v for a, v in ALIASES.items() if a.startswith(f"{name}.")}
+    cls = OWN_PARAMS.get(name)
+    if cls is not None:
+        out.update({f"{name}.{f}": f"{name}.{f}" for f in spec(cls)})
+    return out
 
 
 for _builtin in (FixedPelvis, RedundancyPelvis, PelvisMpcStrategy):
@@ -380,13 +461,14 @@ class Runner:
     """One robot's strategy instance, called through a guard: its exceptions and bad return
     values become :class:`StrategyError` with the user's file and line."""
 
-    __slots__ = ("strategy", "info", "_started", "_def_line")
+    __slots__ = ("strategy", "info", "_started", "_def_line", "_params")
 
     def __init__(self, strategy: PelvisStrategy, entry: StrategyInfo):
         self.strategy = strategy
         self.info = entry
         self._started = False
         self._def_line: str | None = None
+        self._params: ControllerParams | None = None
 
     @property
     def plan(self) -> PelvisPlan | None:
@@ -400,6 +482,10 @@ class Runner:
     def waist_rate(self, s: StrategyInputs) -> float | None:
         """The strategy's rate for this tick, checked: None or a finite float."""
         strategy = self.strategy
+        if s.params is not self._params:  # new parameters: the strategy's own, in force now
+            self._params = s.params
+            if self.info.name in OWN_PARAMS:
+                strategy.params = s.params.own_params(self.info.name)
         try:
             if not self._started:
                 strategy.reset(s)
@@ -566,6 +652,7 @@ def unregister(name: str) -> None:
     entry = _REGISTRY.get(name)
     if entry is not None and not entry.builtin:
         del _REGISTRY[name]
+        _forget_params(name)
         for key, (_, loaded) in list(_LOADED.items()):
             if name in loaded:
                 del _LOADED[key]

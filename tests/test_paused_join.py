@@ -23,6 +23,7 @@ from app.live.loop import LiveLoop
 from app.live.pool import START_DELAY_S, WorkerPool
 from app.live.session import initial_intent
 from controller.params import ControllerParams
+from pelvic_walk.core.robots import Robot
 
 PARAMS = ControllerParams().replace(walk={"n_steps": 40})
 
@@ -65,14 +66,14 @@ def test_a_loop_built_while_paused_joins_at_the_sessions_present():
     # present, app.live.session.SessionView._restart_at), its loop built now
     box.modify(
         lambda c: {
-            "methods": ("fixed", "mpc"),
+            "robots": (Robot("fixed"), Robot("mpc")),
             "reset_requests": c.reset_requests + 1,
             "start_clock": present,
         }
     )
     added: list = []
     second = LiveLoop(
-        lambda: dataclasses.replace(box.get(), methods=("fixed",)),
+        lambda: dataclasses.replace(box.get(), robots=(Robot("fixed"),)),
         added.append,
         clock=wall.clock,
         sleep=wall.sleep,

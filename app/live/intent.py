@@ -16,6 +16,8 @@ from dataclasses import dataclass
 
 from controller import strategy
 from controller.params import ControllerParams
+from pelvic_walk.core import robots as robots_
+from pelvic_walk.core.robots import Robot
 
 DEFAULT_METHODS: tuple[str, ...] = strategy.BUILTINS  # the paper's three, compared
 SPEED_MIN, SPEED_MAX = 0.1, 4.0  # playback speed range (x real time)
@@ -40,7 +42,8 @@ class Intent:
     """Everything the users of one live session asked for."""
 
     params: ControllerParams  # shared by every robot (its ``method`` field is not used)
-    methods: tuple[str, ...] = DEFAULT_METHODS
+    # the robots shown: a strategy, its own settings over ``params``, a label (their key)
+    robots: tuple[Robot, ...] = robots_.of_methods(DEFAULT_METHODS)
     paused: bool = False
     speed: float = 1.0  # x real time
     step_requests: int = 0  # single steps asked for so far (monotonic)
@@ -56,6 +59,22 @@ class Intent:
     anchor: tuple[float, float] = (0.0, 0.0)
     start_clock: float = 0.0  # [s] robots (re)built by a reset start walking at this clock
     version: int = 0  # bumped on every change
+
+    @property
+    def methods(self) -> tuple[str, ...]:
+        """The robots' keys (labels), in their order: what frames, plots and pushes name."""
+        return tuple(r.key for r in self.robots)
+
+    def robot(self, key: str) -> Robot:
+        """The robot ``key``; ValueError naming the robots shown otherwise."""
+        for r in self.robots:
+            if r.key == key:
+                return r
+        raise ValueError(f"no robot {key!r} is shown (robots: {', '.join(self.methods)})")
+
+    def params_of(self, key: str) -> ControllerParams:
+        """Robot ``key``'s parameters: the shared ones with its own settings on top."""
+        return robots_.params_of(self.params, self.robot(key))
 
 
 def check_methods(methods: Sequence[str]) -> tuple[str, ...]:

@@ -49,7 +49,6 @@ split over processes) has them stand by until they are in phase with the session
 
 from __future__ import annotations
 
-import dataclasses
 import logging
 import math
 import time
@@ -242,6 +241,7 @@ class LiveLoop:
         rebuild = (
             old is None
             or intent.methods != old.methods
+            or [r.strategy for r in intent.robots] != [r.strategy for r in old.robots]
             or (intent.reset_requests != self._resets_done)
         )
         if rebuild and intent.paused and self.clock < intent.start_clock - dt / 2:
@@ -256,7 +256,7 @@ class LiveLoop:
         if rebuild:
             user_reset = (intent.reset_requests - intent.auto_restarts) != self._user_resets
             before = self.robots
-            self.robots = {m: self._robot(m, intent.params) for m in intent.methods}
+            self.robots = {m: self._robot(m, intent.params_of(m)) for m in intent.methods}
             for m, robot in self.robots.items():  # the counts of the session go on
                 if m in before:
                     old_robot = before[m]
@@ -279,11 +279,11 @@ class LiveLoop:
             if old is None or intent.methods != old.methods or user_reset:
                 self._rows = {}
                 self._restarted = True
-        elif old is not None and intent.params != old.params:
-            for robot in self.robots.values():
-                robot.session.walker.set_params(
-                    dataclasses.replace(intent.params, method=robot.method)
-                )
+        elif old is not None and (intent.params, intent.robots) != (old.params, old.robots):
+            for robot in self.robots.values():  # each robot's own, from the next tick
+                new = intent.params_of(robot.method)
+                if new != old.params_of(robot.method):
+                    robot.session.walker.set_params(new)
         # a pause or a new speed starts a new measurement; a moved time base (a catch-up after
         # the loop fell behind) does not: the factor must show the lag, not hide it
         if old is None or intent.paused != old.paused or intent.speed != old.speed:
@@ -301,7 +301,9 @@ class LiveLoop:
 
     # -- ticking -----------------------------------------------------------------------------
     def _robot(self, method: str, params: ControllerParams) -> _Robot:
-        cfg = RunConfig(params=dataclasses.replace(params, method=method))
+        """Robot ``method`` (its key: a label) with its own parameters (their ``method``: its
+        strategy)."""
+        cfg = RunConfig(params=params)
         # no series: the displays ask for measurements and kappa when they draw a frame
         return _Robot(method, Session(cfg, record=False))
 

@@ -32,12 +32,14 @@ from typing import Any, cast
 import numpy as np
 
 from app.live.engines import START_DELAY_S, Engine, InProcessEngine, ProcessEngine, WorkerHandle
-from app.live.intent import Intent, check_methods
+from app.live.intent import Intent
 from app.live.loop import PUBLISH_HZ
 from app.live.session import KEEP_S, SessionView
 from app.live.worker import FrameCodec
 from controller import strategy
+from pelvic_walk.core import robots as robots_
 from pelvic_walk.core.frames import LiveFrame
+from pelvic_walk.core.robots import Robot
 
 ALIGN_S = 3.0  # [s] of each part's frames kept to show all robots at one instant
 
@@ -103,13 +105,14 @@ class RemoteSession(SessionView):
         return f"{self.sid}/{method}"
 
     def part_intent(self, method: str, intent: Intent | None = None) -> Intent:
-        return dataclasses.replace(intent or self.intent, methods=(method,))
+        intent = intent or self.intent
+        return dataclasses.replace(intent, robots=(intent.robot(method),))
 
-    def set_methods(self, methods: Sequence[str]) -> Intent:
+    def set_robots(self, robots: Sequence[Robot]) -> Intent:
         """Show these robots (PoolFull when the workers have no room for the new ones)."""
-        methods = check_methods(methods)
-        self.pool.reserve(self, methods)
-        return super().set_methods(methods)
+        robots = robots_.check_all(robots)
+        self.pool.reserve(self, tuple(r.key for r in robots))
+        return super().set_robots(robots)
 
     def _newest_clock(self) -> float | None:
         """The fastest part's newest clock (the merged frame shows the slowest part's): a

@@ -44,7 +44,9 @@ from app.live.intent import (
 )
 from app.live.loop import live_params
 from controller.params import ControllerParams
+from pelvic_walk.core import robots as robots_
 from pelvic_walk.core.frames import LiveFrame
+from pelvic_walk.core.robots import Robot
 
 log = logging.getLogger(__name__)
 KEEP_S = 40.0  # [s] of frames kept for scrubbing and recording (at least 30 s)
@@ -87,12 +89,17 @@ def initial_intent(
     params: ControllerParams | None = None,
     methods: Sequence[str] = DEFAULT_METHODS,
     speed: float = 1.0,
+    robots: Sequence[Robot] | None = None,
 ) -> Intent:
-    """A session's first intent (validated); its time base starts when the session opens."""
+    """A session's first intent (validated); its time base starts when the session opens.
+    ``robots`` (strategies with settings of their own) replace ``methods`` when given."""
     params = (params or live_params()).validated()
+    shown = robots_.check_all(robots) if robots else robots_.of_methods(check_methods(methods))
+    for r in shown:
+        robots_.params_of(params, r)  # each robot's settings in range over these params
     return Intent(
         params=params,
-        methods=check_methods(methods),
+        robots=shown,
         speed=check_speed(speed),
         anchor=(time.monotonic(), 0.0),
     )
@@ -156,17 +163,50 @@ class SessionView:
         params = params.validated()
         return self._box.modify(lambda _cur: {"params": params})
 
-    def update_params(self, **groups) -> Intent:
-        """Partial change, e.g. ``update_params(walk={"step_length": 0.3})``; ValueError."""
-        return self._box.modify(lambda cur: {"params": cur.params.replace(**groups)})
+    def update_params(self, target: str | None = None, **groups) -> Intent:
+        """Partial change, e.g. ``update_params(walk={"step_length": 0.3})``; ValueError.
+
+        ``target`` None: every robot (the shared value, and no robot keeps a setting of its
+        own for these parameters); a robot's key: that robot's own settings only."""
+
+        def change(cur: Intent) -> dict:
+            values = {
+                f"{g}.{k}": v
+                for g, d in groups.items()
+                if isinstance(d, dict)
+                for k, v in d.items()
+            }
+            if target is None:
+                params = cur.params.replace(**groups)
+                stored = {robots_.stored_name(k) for k in values}
+                shown = tuple(
+                    dataclasses.replace(
+                        r, overrides=tuple((k, v) for k, v in r.overrides if k not in stored)
+                    )
+                    for r in cur.robots
+                )
+                return {"params": params, "robots": shown}
+            robot = cur.robot(target)
+            new = robots_.with_settings(robot, values, cur.params)
+            return {"robots": tuple(new if r.key == target else r for r in cur.robots)}
+
+        return self._box.modify(change)
 
     def set_methods(self, methods: Sequence[str]) -> Intent:
-        """Show these robots; all robots are rebuilt and start together."""
-        methods = check_methods(methods)
-        if methods == self.intent.methods:
+        """Show one robot per strategy (no settings of their own); all are rebuilt and start
+        together."""
+        return self.set_robots(robots_.of_methods(check_methods(methods)))
+
+    def set_robots(self, robots: Sequence[Robot]) -> Intent:
+        """Show these robots (strategies with their own settings and labels); all are rebuilt
+        and start together."""
+        robots = robots_.check_all(robots)
+        for r in robots:
+            robots_.params_of(self.intent.params, r)
+        if robots == self.intent.robots:
             return self.intent
         newest = self._newest_clock()  # read before the intent's lock (lock order)
-        return self._box.modify(lambda cur: {"methods": methods, **self._restart_at(cur, newest)})
+        return self._box.modify(lambda cur: {"robots": robots, **self._restart_at(cur, newest)})
 
     def set_speed(self, speed: float) -> Intent:
         speed = check_speed(speed)

@@ -122,7 +122,7 @@ class Horizon:
 class RobotFrame:
     """One robot after one tick: copies of what the scene, plots and API need."""
 
-    method: str
+    method: str  # the robot's key in its session: its label (pelvic_walk.core.robots)
     slot: int  # position among the robots shown (0 = first)
     clock: float  # [s] the session clock of this robot's state (its loop's clock)
     t: float  # [s] the robot's own time since its (re)start
@@ -173,6 +173,11 @@ class RobotFrame:
     # display's or the recording's rate, never in a tick; None before the first tick or once
     # its strategy failed
     qp: TickExplain | None = None
+
+    @property
+    def strategy(self) -> str:
+        """The pelvis strategy it runs (two robots may run one, with other settings)."""
+        return self.params.method
 
     @property
     def status(self) -> str:

@@ -1,6 +1,8 @@
 """Parameters by name, from text: the one reading of ``controller/params.py``'s field specs that
 every face shares (the command line's options, ``--set GROUP.NAME=VALUE`` and sweep grids,
-``pelvic_walk.simulate``'s keywords, the API).
+``pelvic_walk.simulate``'s keywords, the API). A strategy's own parameters are named
+``NAME.FIELD`` (the strategy's name as their group); a paper parameter a strategy owns is also
+named under it (``mpc.alpha`` = ``pelvis.alpha``).
 
 A field is named by its dotted name ``group.name`` or its command-line name (the field's ``cli``
 metadata, else ``group-name``); :func:`convert` reads a value from text and
@@ -14,15 +16,20 @@ import math
 from collections.abc import Iterable
 from typing import Any
 
-from controller.params import GROUPS, ControllerParams, check_value, spec
+from controller.params import GROUPS, OWN_PARAMS, ControllerParams, check_value, resolve, spec
 
 
-def fields() -> Iterable[tuple[str, str, dict[str, Any]]]:
-    """(group, name, metadata) of every parameter, in declaration order."""
+def fields(own: bool = False) -> Iterable[tuple[str, str, dict[str, Any]]]:
+    """(group, name, metadata) of every parameter of the paper, in declaration order; with
+    ``own``, then every registered strategy's own (group: the strategy's name)."""
     defaults = ControllerParams()
     for group in GROUPS:
         for name, meta in spec(getattr(defaults, group)).items():
             yield group, name, meta
+    if own:
+        for group, cls in list(OWN_PARAMS.items()):
+            for name, meta in spec(cls).items():
+                yield group, name, meta
 
 
 def option_name(group: str, name: str, meta: dict[str, Any]) -> str:
@@ -58,11 +65,14 @@ def split_list(items: Iterable[str]) -> list[str]:
 
 
 def meta_of(dotted: str) -> tuple[str, str, dict[str, Any]]:
-    group, _, name = dotted.partition(".")
-    for g, n, meta in fields():
+    """(group, name, metadata) of a parameter named ``group.name``, a strategy's own
+    ``NAME.FIELD``, or a paper parameter under the strategy that owns it (``mpc.alpha``: the
+    paper's ``pelvis.alpha`` is returned)."""
+    group, _, name = resolve(dotted).partition(".")
+    for g, n, meta in fields(own=True):
         if g == group and n == name:
             return g, n, meta
-    known = ", ".join(f"{g}.{n}" for g, n, _ in fields())
+    known = ", ".join(f"{g}.{n}" for g, n, _ in fields(own=True))
     raise ValueError(f"unknown parameter {dotted!r} (one of: {known})")
 
 
