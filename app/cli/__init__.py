@@ -19,11 +19,13 @@ from app.cli.options import (
     add_jobs_argument,
     add_param_options,
     add_ray_argument,
+    add_set_argument,
     add_strategy_argument,
     load_strategy_options,
     method_name,
     params_from_args,
     positive_int,
+    robot_spec,
 )
 from app.cli.sweep import add_sweep_arguments
 from controller import strategy
@@ -102,11 +104,23 @@ def build_parser() -> argparse.ArgumentParser:
         help="the robots every session starts with, with commas or spaces (default: fixed "
         "redundancy mpc and every --strategy)",
     )
+    p.add_argument(
+        "--robot",
+        dest="robots",
+        action="append",
+        type=robot_spec,
+        default=None,
+        metavar="NAME[,KEY=VALUE...][@LABEL]",
+        help="a robot every session starts with: a strategy, its own settings over the shared "
+        "parameters and a label, e.g. --robot mpc --robot \"mpc,com.horizon=0.8@short "
+        "horizon\" (repeatable, at most 6; replaces --methods)",
+    )
     add_strategy_argument(
         p,
         "FILE.py[:Class]: your own pelvis strategy (docs/STRATEGIES.md), one more robot "
         "beside the paper's three, in its own colour (repeatable); loaded once at start",
     )
+    add_set_argument(p)
     p.add_argument(
         "--workers",
         type=int,
@@ -485,6 +499,8 @@ def main(argv: list[str] | None = None) -> int:
                 args.strategies,
                 sessions_per_address=args.sessions_per_address,
                 trusted_proxies=args.trusted_proxies,
+                robots=args.robots,
+                param_set=args.param_set,
             )
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main

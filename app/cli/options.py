@@ -156,6 +156,17 @@ class MethodList(argparse.Action):
         setattr(namespace, self.dest, methods)
 
 
+def robot_spec(text: str) -> Any:
+    """An argparse type: a robot ``NAME[,KEY=VALUE...][@LABEL]`` (``serve --robot``),
+    checked (a :class:`~pelvic_walk.core.robots.Robot`; the parser's one-line error else)."""
+    from pelvic_walk.core.robots import parse
+
+    try:
+        return parse(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def _number(group: str, name: str, meta: dict[str, Any]):
     def parse(text: str) -> Any:
         try:

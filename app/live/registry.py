@@ -353,7 +353,7 @@ class SessionRegistry:
         for w in self.pool.workers():
             robots = []
             for part in w["robots"]:
-                sid, _, method = part.rpartition("/")
+                sid, _, method = part.partition("/")  # (a label may hold a '/')
                 robots.append(part if sid == SHARED or reveal(sid) else f"private/{method}")
             out.append({**w, "robots": sorted(robots)})
         return out

@@ -45,6 +45,7 @@ from pydantic import ValidationError
 
 from app.live.engines import InProcessEngine
 from app.live.intent import DEFAULT_METHODS
+from app.live.loop import live_params
 from app.live.pool import WorkerPool
 from app.live.registry import SessionRegistry
 from app.live.session import initial_intent
@@ -54,6 +55,8 @@ from app.web.auth import Instructor, redact_logs
 from app.web.settings import Settings, worker_layout
 from app.web.view import Display
 from controller import strategy
+from pelvic_walk.core.params import parse_assignment
+from pelvic_walk.core.robots import Robot
 
 log = logging.getLogger(__name__)
 
@@ -137,6 +140,8 @@ def serve(
     strategies: list[str] | None = None,
     sessions_per_address: int | None = None,
     trusted_proxies: list[str] | None = None,
+    robots: list[Robot] | None = None,
+    param_set: list[str] | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
@@ -144,7 +149,10 @@ def serve(
     ``PELVIC_WALK_*``). ``report_dir``: what ``/report`` shows (default: the latest
     ``pelvic-walk experiments`` output, else the packaged reference report).
     ``strategies``: a user's strategy files (``--strategy``), already loaded by the command
-    line (else loaded here); each adds a robot to the default ``methods``.
+    line (else loaded here); each adds a robot to the default ``methods``. ``robots``
+    (``--robot``): the robots every session starts with, strategies with their own settings
+    (instead of ``methods``); ``param_set`` (``--set GROUP.NAME=VALUE``): the shared
+    parameters' values, a strategy's own (``gain.k=12``) included.
     """
     import uvicorn
 
@@ -183,7 +191,22 @@ def serve(
         loaded = strategy.load_files(strategies or [])
     except strategy.StrategyLoadError as exc:
         return _fail(f"--strategy {exc}")
-    intent = initial_intent(methods=methods or (*DEFAULT_METHODS, *loaded))
+    if robots and methods:
+        return _fail("--robot and --methods both name the robots: give one")
+    shared: dict[str, dict[str, Any]] = {}
+    try:
+        for text in param_set or []:
+            group, name, value = parse_assignment(text)
+            shared.setdefault(group, {})[name] = value
+        params = live_params().replace(**shared)
+    except ValueError as exc:
+        return _fail(f"--set: {exc}")
+    try:
+        intent = initial_intent(
+            params, methods=methods or (*DEFAULT_METHODS, *loaded), robots=robots or None
+        )
+    except ValueError as exc:
+        return _fail(f"--robot: {exc}" if robots else str(exc))
     if settings.shared_demo and len(intent.methods) > max(workers, 1) * robots_per_worker:
         return _fail(
             f"{workers} worker(s) x {robots_per_worker} robot(s) cannot hold the"

@@ -20,7 +20,7 @@ from app.web.api.recording import recording_router
 from app.web.api.sessions import Caller, caller_of, resolvers, reveal_to, sessions_router
 from app.web.api.strategies import strategies_router
 from app.web.auth import Instructor
-from controller.params import GROUPS, ControllerParams, spec
+from controller.params import GROUPS, OWN_PARAMS, ControllerParams, spec
 from pelvic_walk.core.report_dir import ReportChoice, choose_report
 
 
@@ -108,9 +108,13 @@ def create_app(
     @spec_router.get("/params/spec")
     def get_params_spec() -> dict[str, Any]:
         """Ranges, steps, units, defaults and paper values of every parameter
-        (controller/params.py, the one source of them)."""
+        (controller/params.py, the one source of them), then the server's strategies' own
+        (a group named by the strategy: ``gain.k`` is ``{"gain": {"k": {...}}}``)."""
         defaults = ControllerParams()
-        return finite({g: spec(getattr(defaults, g)) for g in GROUPS})
+        out = {g: spec(getattr(defaults, g)) for g in GROUPS}
+        for name, cls in list(OWN_PARAMS.items()):
+            out.setdefault(name, spec(cls))
+        return finite(out)
 
     by_header, by_path = resolvers(registry, caller)
 

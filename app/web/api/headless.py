@@ -26,6 +26,7 @@ from app.web.api.edges import finite, router, unprocessable
 from app.web.api.models import RunRequest, RunStatus, updates
 from app.web.api.sessions import Caller
 from controller.params import ControllerParams
+from pelvic_walk.core import robots as robots_
 
 RETRY_AFTER_S = 10  # [s] a refused client's Retry-After (a short run takes a few seconds)
 
@@ -119,6 +120,15 @@ class RunManager:
         self._pool.shutdown(wait=False, cancel_futures=True)
 
 
+def run_params(body: Any) -> ControllerParams:
+    """A run request's parameters: the defaults with its groups (the paper's and strategies'
+    own), then its ``robot``'s strategy and settings, else its ``method`` (ValueError)."""
+    params = ControllerParams().replace(method=body.method, **updates(body))
+    if body.robot is not None:
+        params = robots_.params_of(params, robots_.parse(body.robot))
+    return params
+
+
 def runs_router(
     runs: RunManager, client_of: Callable[[Caller], str | None], caller_dep: Any
 ) -> APIRouter:
@@ -134,11 +144,12 @@ def runs_router(
     )
     def post_run(body: RunRequest, caller: Caller = Who) -> dict[str, Any]:  # type: ignore[valid-type]
         """Start a headless closed-loop run; poll ``GET /api/runs/{id}`` for its summary (the
-        keys of ``simulate --json``, identical to the CLI's for the same arguments). A client
+        keys of ``simulate --json``, identical to the CLI's for the same arguments). A live
+        robot's walk: the session's groups (GET /api/params) and its ``robot`` form. A client
         (its private session, else its address) has at most a few runs queued or running;
         the instructor's bearer token is beyond that limit."""
         try:
-            params = ControllerParams().replace(method=body.method, **updates(body))  # type: ignore[attr-defined]
+            params = run_params(body)
         except (ValueError, TypeError) as exc:
             raise unprocessable(str(exc)) from None
         try:

@@ -21,6 +21,8 @@ from typing import Any
 from fastapi import APIRouter, Depends, HTTPException, Query, Request
 from fastapi.security import HTTPAuthorizationCredentials
 
+from app.live.intent import check_methods
+from app.live.pool import PoolFull
 from app.live.registry import SHARED
 from app.live.session import SessionView
 from app.web.api.edges import conflict, finite, router, unprocessable
@@ -35,10 +37,12 @@ from app.web.api.models import (
     StateResponse,
     StepRequest,
     params_dict,
+    robot_of,
     updates,
 )
 from app.web.auth import BEARER, INSTRUCTOR_COOKIE, Instructor
 from controller import strategy
+from pelvic_walk.core import robots as robots_
 from pelvic_walk.core.frames import LiveFrame, RobotFrame
 
 # How long a handler waits for the loop to take its intent before answering anyway (a
@@ -59,9 +63,13 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
     frame = _shown(session)
     playback = session.playback()
     span = playback.kept
+    differ = robots_.differing(session.intent.robots)
     robots = [
         {
-            "method": r.method,
+            "label": r.method,
+            "method": r.method,  # (its label: the key of old)
+            "strategy": r.strategy,
+            "settings": differ.get(r.method, {}),
             "t": r.t,
             "step_index": r.step_index,
             "in_dsp": r.in_dsp,
@@ -114,10 +122,14 @@ def state_of(sid: str, session: SessionView) -> dict[str, Any]:
 
 
 def _shown_robot(session: SessionView, method: str | None) -> tuple[LiveFrame, RobotFrame]:
-    """The shown frame and its robot ``method`` (the MPC's, else the first, by default); 422
-    naming the robots shown when there is no such robot."""
+    """The shown frame and its robot labelled ``method`` (by default the first running the
+    MPC, else the first); 422 naming the robots shown when there is no such robot."""
     frame = _shown(session)
-    robot = frame.robot(method) if method else (frame.robot(strategy.MPC) or frame.robots[0])
+    robot = (
+        frame.robot(method)
+        if method
+        else next((r for r in frame.robots if r.strategy == strategy.MPC), frame.robots[0])
+    )
     if robot is None:
         shown = ", ".join(r.method for r in frame.robots)
         raise unprocessable(f"no robot {method!r} is shown (robots: {shown})")
@@ -135,6 +147,7 @@ def horizon_of(sid: str, session: SessionView, method: str | None) -> dict[str, 
         {
             "session": sid,
             "method": robot.method,
+            "strategy": robot.strategy,
             "clock": frame.clock,
             "t": h.t,
             **h.plane_columns(),
@@ -153,7 +166,27 @@ def qp_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
             "the robot has not ticked since it (re)started, or its strategy stopped it: "
             "resume or step first"
         )
-    return finite({"session": sid, "method": robot.method, "clock": frame.clock, **rec.to_dict()})
+    return finite(
+        {
+            "session": sid,
+            "method": robot.method,
+            "strategy": robot.strategy,
+            "clock": frame.clock,
+            **rec.to_dict(),
+        }
+    )
+
+
+ROBOT_QUERY = (
+    "the robot's label (GET /api/state; default: the first running the MPC, else the first)"
+)
+
+
+def _one(method: str | None, robot: str | None) -> str | None:
+    """The robot a query names (``robot`` or ``method``, the name of old); 422 if both differ."""
+    if method and robot and method != robot:
+        raise unprocessable(f"robot {robot!r} and method {method!r}: name one")
+    return robot or method
 
 
 def instructor_check(
@@ -235,26 +268,46 @@ def session_router(
 
     @r.get("/params", response_model=ParamsModel, tags=["params"])
     def get_params(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
+        """The shared parameters (the paper's groups, then each strategy's own as a group
+        named by it), the robots shown (``robots``: label, strategy, their own settings)."""
         intent = s[1].intent
-        return params_dict(intent.params, intent.methods)
+        return finite(params_dict(intent.params, intent.robots))
 
     @r.put("/params", response_model=ParamsModel, tags=["params"])
     def put_params(
         body: ParamsUpdate,  # type: ignore[valid-type]
         s: tuple[str, SessionView] = Writable,
     ) -> dict[str, Any]:
-        """Change some parameters (others keep their value): gains act on the next tick,
-        walking parameters from the next step."""
+        """Change some parameters (others keep their value): gains and a strategy's own
+        parameters act on the next tick, walking parameters from the next step. With
+        ``robot`` (a label) only that robot's own settings change; without, every robot's
+        (the shared value). ``robots`` (or ``methods``, one robot per strategy) replaces the
+        robots shown first; then the parameters apply."""
         session = s[1]
-        try:
-            ticket = session.update_params(**updates(body))
-            if body.methods is not None:  # type: ignore[attr-defined]
-                ticket = session.set_methods(body.methods)  # type: ignore[attr-defined]
+        b: Any = body
+        try:  # everything checked before anything changes
+            groups = updates(body)
+            session.intent.params.replace(**groups)  # known parameters, in range
+            shown = session.intent.robots
+            if b.robots is not None:
+                shown = robots_.check_all([robot_of(x) for x in b.robots])
+            elif b.methods is not None:
+                shown = robots_.of_methods(check_methods(b.methods))
+            if b.robot is not None and b.robot not in [r.key for r in shown]:
+                keys = ", ".join(r.key for r in shown)
+                raise ValueError(f"no robot {b.robot!r} is shown (robots: {keys})")
+            ticket = None
+            if b.robots is not None or b.methods is not None:
+                ticket = session.set_robots(shown)
+            if groups or ticket is None:
+                ticket = session.update_params(target=b.robot, **groups)
         except (ValueError, TypeError) as exc:
             raise unprocessable(str(exc)) from None
+        except PoolFull as exc:
+            raise HTTPException(503, detail=f"no room for these robots now: {exc}") from None
         session.wait_applied(ticket, APPLY_TIMEOUT_S)
         intent = session.intent
-        return params_dict(intent.params, intent.methods)
+        return finite(params_dict(intent.params, intent.robots))
 
     @r.post("/sim/pause", tags=["playback"])
     def pause(s: tuple[str, SessionView] = Writable) -> dict[str, Any]:
@@ -302,7 +355,12 @@ def session_router(
         """Push one robot's torso horizontally (MuJoCo ``xfrc_applied``) for ``duration`` s.
         The CoM MPC keeps its plan and eq. (19) moves the pelvis to bring the measured CoM back
         onto it; nothing moves the footsteps."""
-        return _playback(s[1], lambda: s[1].push(body.method, body.force, body.duration))
+        name = body.robot or body.method
+        if body.robot and body.method and body.robot != body.method:
+            raise unprocessable(f"robot {body.robot!r} and method {body.method!r}: name one")
+        if not name:
+            raise unprocessable("name the robot to push: robot (its label)")
+        return _playback(s[1], lambda: s[1].push(name, body.force, body.duration))
 
     @r.get("/state", response_model=StateResponse, tags=["state"])
     def get_state(s: tuple[str, SessionView] = Session) -> dict[str, Any]:
@@ -311,27 +369,25 @@ def session_router(
 
     @r.get("/horizon", response_model=HorizonResponse, tags=["state"])
     def get_horizon(
-        method: str | None = Query(
-            None, description="fixed, redundancy or mpc (default: mpc if shown, else the first)"
-        ),
+        method: str | None = Query(None, description=ROBOT_QUERY),
+        robot: str | None = Query(None, description="the same as method"),
         s: tuple[str, SessionView] = Session,
     ) -> dict[str, Any]:
         """The robot's plan over the horizon at the shown instant (Fig. 5-7): predicted CoM
         and ZMP, ZMP reference and bounds, planned feet, reference and optimised pelvic angle;
         lists of equal length, one per horizon sample."""
-        return horizon_of(s[0], s[1], method)
+        return horizon_of(s[0], s[1], _one(method, robot))
 
     @r.get("/qp", response_model=QpResponse, tags=["state"])
     def get_qp(
-        method: str | None = Query(
-            None, description="fixed, redundancy or mpc (default: mpc if shown, else the first)"
-        ),
+        method: str | None = Query(None, description=ROBOT_QUERY),
+        robot: str | None = Query(None, description="the same as method"),
         s: tuple[str, SessionView] = Session,
     ) -> dict[str, Any]:
         """What each of the robot's four optimisations did at the shown instant (the CoM MPC,
         the pelvic MPC, the IK, the arm swing): status, iterations and time, the cost split
         into its named terms, every active constraint by name with its multiplier, and what
         the fallback did when a solve failed. Follows pause and seek like the horizon."""
-        return qp_of(s[0], s[1], method)
+        return qp_of(s[0], s[1], _one(method, robot))
 
     return r

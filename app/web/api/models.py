@@ -7,11 +7,23 @@ from __future__ import annotations
 
 from typing import Annotated, Any, Literal, cast
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, Field, create_model
+from pydantic import (
+    AfterValidator,
+    BaseModel,
+    ConfigDict,
+    Field,
+    StrictBool,
+    StrictFloat,
+    StrictInt,
+    StrictStr,
+    create_model,
+)
 
 from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX, SPEED_MAX, SPEED_MIN, STEP_UNTIL
 from controller import strategy
 from controller.params import GROUPS, ControllerParams, spec
+from pelvic_walk.core import robots as robots_
+from pelvic_walk.core.robots import MAX_ROBOTS, Robot
 
 
 def _registered(name: str) -> str:
@@ -77,17 +89,82 @@ def _group_models() -> tuple[dict[str, type[BaseModel]], dict[str, type[BaseMode
 
 
 GROUP_MODELS, GROUP_UPDATES = _group_models()
+
+# A value of a strategy's own parameter (its range is checked where the parameters are built)
+OwnValue = StrictFloat | StrictInt | StrictBool | StrictStr
+STRATEGY_GROUPS = (
+    "More keys: a strategy's own parameters, as a group named by the strategy "
+    '(`"gain": {"k": 12}`, the server\'s strategies with a `Params`: GET /api/params/spec), '
+    'or a paper parameter under the strategy that owns it (`"mpc": {"alpha": 2}` is '
+    "pelvis.alpha)"
+)
+
+
+class _StrategyGroups(BaseModel):
+    """A model whose further keys are strategies' own parameter groups (their names and
+    fields are the server's registered strategies', read at each request)."""
+
+    model_config = ConfigDict(extra="allow", json_schema_extra={"description": STRATEGY_GROUPS})
+    __pydantic_extra__: dict[str, dict[str, OwnValue]] = Field(init=False)
+
+
+class RobotSpec(BaseModel):
+    """A robot: a strategy, its own settings over the session's parameters, a label."""
+
+    model_config = STRICT
+    strategy: MethodName = Field(..., description="a registered strategy (GET /api/strategies)")
+    settings: dict[str, OwnValue] = Field(
+        default_factory=dict,
+        description='its own parameter values, by dotted name: {"com.horizon": 0.8, "gain.k": 12}',
+    )
+    label: str = Field(
+        "", max_length=40, description="its name in the session (default: made from the above)"
+    )
+
+
+class RobotInfo(BaseModel):
+    label: str = Field(description="its key in the session (state, horizon, push, plots)")
+    strategy: str
+    settings: dict[str, Any] = Field(description="its own settings over the shared parameters")
+    text: str = Field(description="its form NAME[,KEY=VALUE...][@LABEL] (serve --robot)")
+
+
+ROBOTS_DESCRIPTION = (
+    "replace the session's robots (all restart together): each a form "
+    "NAME[,KEY=VALUE...][@LABEL] (`mpc,com.horizon=0.8@short`) or an object {strategy, "
+    f"settings, label}}; 1 to {MAX_ROBOTS}, labels unique"
+)
+
 ParamsModel = create_model(
     "ParamsModel",
-    __config__=STRICT,
+    __base__=_StrategyGroups,
     **cast(Fields, {g: (GROUP_MODELS[g], ...) for g in GROUPS}),
-    methods=(list[MethodName], Field(..., description="robots shown live, one per method")),
+    methods=(
+        list[str],
+        Field(..., description="the robots shown live, by their labels (in their order)"),
+    ),
+    robots=(
+        list[RobotInfo],
+        Field(..., description="the robots shown: label, strategy and their own settings"),
+    ),
     control_dt=(float, Field(..., description="control period [s] (fixed)")),
 )
 ParamsUpdate = create_model(
     "ParamsUpdate",
-    __config__=STRICT,
+    __base__=_StrategyGroups,
     **cast(Fields, {g: (GROUP_UPDATES[g] | None, None) for g in GROUPS}),
+    robot=(
+        cast(Any, str | None),
+        Field(
+            None,
+            description="a robot's label: the change is that robot's own setting (absent: "
+            "every robot's, and no robot keeps its own value of those parameters)",
+        ),
+    ),
+    robots=(
+        cast(Any, list[str | RobotSpec] | None),
+        Field(None, min_length=1, max_length=MAX_ROBOTS, description=ROBOTS_DESCRIPTION),
+    ),
     methods=(
         cast(Any, list[MethodName] | None),  # a UnionType is not a type[Any] to mypy
         Field(
@@ -101,7 +178,16 @@ ParamsUpdate = create_model(
 )
 RunRequest = create_model(
     "RunRequest",
-    __config__=STRICT,
+    __base__=_StrategyGroups,
+    robot=(
+        cast(Any, str | None),
+        Field(
+            None,
+            description="a robot's form NAME[,KEY=VALUE...] (a live robot's `text` in GET "
+            "/api/params): its strategy and its settings over the groups given (replaces "
+            "`method`)",
+        ),
+    ),
     method=(
         MethodName,
         Field(
@@ -119,17 +205,56 @@ RunRequest = create_model(
 
 
 def updates(body: BaseModel) -> dict[str, dict[str, Any]]:
-    """The parameter groups a request changes (fields it leaves out keep their value)."""
-    return {
+    """The parameter groups a request changes (fields it leaves out keep their value): the
+    paper's, then strategies' own (``{"gain": {"k": 12}}``, ``{"mpc": {"alpha": 2}}``)."""
+    out = {
         g: getattr(body, g).model_dump(exclude_none=True)
         for g in GROUPS
         if getattr(body, g) is not None
     }
+    for name, values in (body.model_extra or {}).items():
+        if name not in strategy.names():
+            groups = ", ".join((*GROUPS, *(n for n in strategy.names() if own_values(n))))
+            raise ValueError(f"unknown parameter group {name!r} (one of: {groups})")
+        if not own_values(name):
+            raise ValueError(f"strategy {name!r} has no parameters of its own")
+        out[name] = dict(values)
+    return out
 
 
-def params_dict(params: ControllerParams, methods: tuple[str, ...]) -> dict[str, Any]:
+def own_values(name: str, params: ControllerParams | None = None) -> dict[str, Any]:
+    """Strategy ``name``'s own parameters with their values in ``params`` (its ``Params``
+    fields and the paper's it owns, ``alpha`` for ``mpc.alpha``), by field name."""
+    params = params or ControllerParams()
+    return {k.partition(".")[2]: params.value(k) for k in strategy.own_fields(name)}
+
+
+def robot_of(item: str | RobotSpec) -> Robot:
+    """A robot of a request: its form, or an object (ValueError, one line)."""
+    if isinstance(item, str):
+        return robots_.parse(item)
+    return robots_.make(item.strategy, item.settings, item.label)
+
+
+def robot_info(robot: Robot) -> dict[str, Any]:
+    return {
+        "label": robot.key,
+        "strategy": robot.strategy,
+        "settings": dict(robot.overrides),
+        "text": robot.text(),
+    }
+
+
+def params_dict(params: ControllerParams, robots: tuple[Robot, ...]) -> dict[str, Any]:
+    """``GET /api/params``: the shared parameters (the paper's groups, then every strategy's
+    own), the robots shown and their own settings."""
     out: dict[str, Any] = {g: dict(vars(getattr(params, g))) for g in GROUPS}
-    out["methods"] = list(methods)
+    for name in strategy.names():
+        own = own_values(name, params)
+        if own and name not in out:
+            out[name] = own
+    out["methods"] = [r.key for r in robots]
+    out["robots"] = [robot_info(r) for r in robots]
     out["control_dt"] = params.control_dt
     return out
 
@@ -165,7 +290,8 @@ class SeekRequest(BaseModel):
 
 class PushRequest(BaseModel):
     model_config = STRICT
-    method: MethodName = Field(..., description="the robot to push")
+    robot: str | None = Field(None, description="the robot to push, by its label")
+    method: str | None = Field(None, description="the same as robot (the name of old)")
     force: tuple[float, float] = Field(
         ..., description=f"[Fx, Fy] horizontal force on the torso [N], |F| <= {PUSH_FORCE_MAX:.0f}"
     )
@@ -175,7 +301,12 @@ class PushRequest(BaseModel):
 
 
 class RobotState(BaseModel):
-    method: str
+    label: str = Field(description="the robot's key in the session (its label)")
+    method: str = Field(description="the same as label (the key of old)")
+    strategy: str = Field(description="the pelvis strategy it runs")
+    settings: dict[str, Any] = Field(
+        description='its own settings that not every robot shares: {"com.horizon": 0.8}'
+    )
     t: float = Field(description="the robot's time since its (re)start [s]")
     step_index: int
     in_dsp: bool = Field(description="both feet down inside a step (double support)")
@@ -245,7 +376,8 @@ class HorizonResponse(BaseModel):
     """The plan of one robot over the horizon at the shown instant (paper Fig. 5-7)."""
 
     session: str
-    method: str
+    method: str = Field(description="the robot's label")
+    strategy: str
     clock: float = Field(description="session clock of the instant [s]")
     t: list[float] = Field(description="[s] from the instant")
     com_x: list[float]
@@ -307,7 +439,8 @@ class QpResponse(BaseModel):
     """The four layers' optimisations of one robot at the shown instant (the QP inspector)."""
 
     session: str
-    method: str
+    method: str = Field(description="the robot's label")
+    strategy: str
     clock: float = Field(description="session clock of the instant [s]")
     t: float = Field(description="[s] the robot's time of the tick explained")
     meaning: str = Field(description="what the active set means, in a sentence")
