@@ -72,6 +72,22 @@ def _raise_for(response: httpx.Response) -> None:
     raise _ERRORS.get(response.status_code, ApiError)(response.status_code, detail, body)
 
 
+def _groups(params: Mapping[str, Any]) -> dict[str, dict[str, Any]]:
+    """Keywords as the API's groups: the paper's names are checked here; another dotted name
+    (a strategy's own ``gain.k``, ``mpc.alpha``) goes as it is, for the server to check
+    (its strategies are not loaded here)."""
+    body: dict[str, dict[str, Any]] = {}
+    for key, value in params.items():
+        try:
+            group, name, _ = _params._field_of(key)
+        except ValueError:
+            group, dot, name = key.partition(".")
+            if not (dot and group and name):
+                raise
+        body.setdefault(group, {})[name] = _params._plain(value)
+    return body
+
+
 class Client:
     """Drive a served tool (a lecture's script, a notebook beside the class's page).
 
@@ -162,24 +178,44 @@ class Client:
 
     # -- a live session -------------------------------------------------------------------
     def params(self) -> dict[str, Any]:
-        """The parameters in force: groups ``walk``, ``com``, ``pelvis``, ``ik``, ``arms``, and
-        ``methods`` (the robots shown)."""
+        """The parameters in force: groups ``walk``, ``com``, ``pelvis``, ``ik``, ``arms``,
+        each strategy's own (a group named by it: ``"gain": {"k": 4.0}``), ``methods`` (the
+        robots' labels) and ``robots`` (label, strategy, own settings, form of each)."""
         return self._json("GET", self._live("params"))
 
-    def set_params(self, methods: Sequence[str] | None = None, **params: Any) -> dict[str, Any]:
+    def set_params(
+        self,
+        methods: Sequence[str] | None = None,
+        robot: str | None = None,
+        **params: Any,
+    ) -> dict[str, Any]:
         """Change some parameters, by the names :func:`pelvic_walk.simulate` takes
-        (``step_length=0.3``, ``pelvis_k_pel=0.3``, ``**{"pelvis.k_pel": 0.3}``); ``methods``:
-        the robots to show (restarts them together). Gains act on the next tick, walking
+        (``step_length=0.3``, ``pelvis_k_pel=0.3``, ``**{"pelvis.k_pel": 0.3}``, a strategy's
+        own ``**{"gain.k": 12}``); ``robot``: a robot's label, whose own settings change (the
+        others keep theirs; without it every robot's change); ``methods``: the robots to show,
+        one per strategy (restarts them together). Gains act on the next tick, walking
         parameters from the next step. Returns the parameters in force."""
-        body: dict[str, Any] = {}
-        for key, value in params.items():  # names here, values checked by the server
-            group, name, _ = _params._field_of(key)
-            body.setdefault(group, {})[name] = _params._plain(value)
+        body: dict[str, Any] = _groups(params)
         if methods is not None:
             body["methods"] = [methods] if isinstance(methods, str) else list(methods)
-        if not body:
+        if robot is not None:
+            body["robot"] = robot
+        if not body or list(body) == ["robot"]:
             raise ValueError("set_params() needs a parameter or methods=")
         return self._json("PUT", self._live("params"), json=body)
+
+    def robots(self) -> list[dict[str, Any]]:
+        """The robots shown: ``label``, ``strategy``, ``settings`` (its own values over the
+        shared parameters) and ``text`` (its form ``NAME[,KEY=VALUE...][@LABEL]``)."""
+        return self.params()["robots"]
+
+    def set_robots(self, robots: Sequence[str | Mapping[str, Any]]) -> list[dict[str, Any]]:
+        """Show these robots (all restart together): each a form such as
+        ``"mpc,com.horizon=0.8@short"``, or ``{"strategy": "mpc", "settings": {...},
+        "label": "short"}``. Returns them as :meth:`robots` does."""
+        items = [robots] if isinstance(robots, str) else list(robots)
+        body = {"robots": [r if isinstance(r, str) else dict(r) for r in items]}
+        return self._json("PUT", self._live("params"), json=body)["robots"]
 
     def pause(self) -> dict[str, Any]:
         """Stop the clock (``POST /api/sim/pause``)."""
@@ -212,16 +248,19 @@ class Client:
         return self._json("POST", self._live("sim/seek"), json={"t": t})
 
     def push(self, method: str, force: Sequence[float], duration: float = 0.1) -> dict[str, Any]:
-        """Push robot ``method``'s torso with ``force`` = (Fx, Fy) [N] for ``duration`` [s]."""
+        """Push the torso of the robot labelled ``method`` with ``force`` = (Fx, Fy) [N] for
+        ``duration`` [s]."""
         body = {"method": method, "force": [float(f) for f in force], "duration": duration}
         return self._json("POST", self._live("sim/push"), json=body)
 
     def state(self) -> dict[str, Any]:
-        """The clock, what is kept, and every robot's state (``GET /api/state``)."""
+        """The clock, what is kept, and every robot's state (``GET /api/state``), each named
+        by its ``label`` with its ``strategy`` and the ``settings`` it does not share."""
         return self._json("GET", self._live("state"))
 
     def horizon(self, method: str | None = None) -> dict[str, Any]:
-        """One robot's plan over the horizon at the shown instant (``GET /api/horizon``)."""
+        """One robot's plan over the horizon at the shown instant (``GET /api/horizon``);
+        ``method``: its label (default: the first running the MPC)."""
         query = {"method": method} if method else None
         return self._json("GET", self._live("horizon"), params=query)
 
@@ -276,12 +315,9 @@ class Client:
         self, method: str = "mpc", seed: int | None = None, **params: Any
     ) -> dict[str, Any]:
         """Queue a headless run on the server (``POST /api/runs``): ``{"id", "status", ...}``."""
-        body: dict[str, Any] = {"method": method}
+        body: dict[str, Any] = {"method": method, **_groups(params)}
         if seed is not None:
             body["seed"] = seed
-        for key, value in params.items():
-            group, name, _ = _params._field_of(key)
-            body.setdefault(group, {})[name] = _params._plain(value)
         return self._json("POST", "/api/runs", json=body)
 
     def get_run(self, run_id: str) -> dict[str, Any]:
