@@ -19,7 +19,7 @@ from app.live.session import SessionView
 from app.web import recording
 from app.web.recording import check_seconds, decimate, kept_seconds
 
-FILES = {"index.html", "scene.html", "timeseries.csv", "plots.png", "README.txt"}
+FILES = {"index.html", "scene.html", "timeseries.csv", "plots.png", "robots.json", "README.txt"}
 
 
 LIVE_SESSION = {"methods": ["mpc"], "speed": 4.0}  # one robot at 4x: seconds are kept quickly

@@ -7,10 +7,11 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from controller.params import ControllerParams
+from controller.params import GROUPS, ControllerParams
 from pelvic_walk.core.frames import LiveFrame
 
 
@@ -25,7 +26,30 @@ class Recording:
 
     @property
     def methods(self) -> tuple[str, ...]:
+        """The robots' labels (their keys), in their order."""
         return tuple(r.method for r in self.frames[-1].robots)
+
+    @property
+    def strategies(self) -> dict[str, str]:
+        """Robot label -> the strategy it runs (two robots may run one)."""
+        return {r.method: r.strategy for r in self.frames[-1].robots}
+
+    def robots(self) -> list[dict[str, Any]]:
+        """Every robot: ``label``, ``strategy``, ``settings`` (its parameters that not every
+        robot shares, by dotted name) and ``params`` (all of its parameters in force, by
+        dotted name, its strategy's own included)."""
+        tables = {r.method: flat_params(r.params) for r in self.frames[-1].robots}
+        keys = sorted({k for t in tables.values() for k in t})
+        differ = [k for k in keys if len({repr(t.get(k)) for t in tables.values()}) > 1]
+        return [
+            {
+                "label": label,
+                "strategy": self.strategies[label],
+                "settings": {k: t[k] for k in differ if k in t},
+                "params": t,
+            }
+            for label, t in tables.items()
+        ]
 
     @property
     def start(self) -> float:
@@ -44,3 +68,11 @@ class Recording:
         """A file name stem: ``pelvic-walk-recording-YYYYmmdd-HHMMSS``."""
         stamp = time.strftime("%Y%m%d-%H%M%S", time.localtime(self.created))
         return f"pelvic-walk-recording-{stamp}"
+
+
+def flat_params(params: ControllerParams) -> dict[str, Any]:
+    """Every parameter by dotted name (``walk.step_length``; a strategy's own set away from
+    its default, ``gain.k``), the strategy left out (it is the robot's)."""
+    out = {f"{g}.{k}": v for g in GROUPS for k, v in vars(getattr(params, g)).items()}
+    out.update(dict(params.own))
+    return out

@@ -14,6 +14,7 @@ from matplotlib.figure import Figure
 from app.live.history import COL
 from app.web.overlays import DANGER
 from app.web.plots import LOG_PLOTS, PLOTS
+from app.web.record_page import robot_title
 from pelvic_walk.core.methods import METHOD_INFO
 from pelvic_walk.core.metrics import KAPPA_SINGULAR
 
@@ -33,11 +34,33 @@ def dsp_spans(t: np.ndarray, in_dsp: np.ndarray) -> list[tuple[float, float]]:
     ]
 
 
+# the line styles of a second, third... robot of one strategy (its colour kept)
+REPEAT_STYLES: tuple[tuple[str, str], ...] = ((":", "x"), ("-.", "+"), ((0, (1, 1, 6, 1)), "1"))
+
+
+def robot_styles(strategies: dict[str, str]) -> dict[str, dict[str, object]]:
+    """Robot label -> matplotlib keywords: its strategy's style; a second robot of the same
+    strategy keeps the colour with other dashes and markers (told apart without colour)."""
+    out: dict[str, dict[str, object]] = {}
+    seen: dict[str, int] = {}
+    for label, name in strategies.items():
+        info = METHOD_INFO.get(name)
+        style = dict(info.mpl_style()) if info is not None else {"color": "#000000"}
+        k = seen.get(name, 0)
+        seen[name] = k + 1
+        if k:
+            ls, marker = REPEAT_STYLES[(k - 1) % len(REPEAT_STYLES)]
+            style.update(linestyle=ls, marker=marker)
+        out[label] = style
+    return out
+
+
 def plots_png(rec: Recording, dpi: int = 100) -> bytes:
     """Five stacked plots over the recording's window (Figure, not pyplot: thread-safe)."""
     fig = Figure(figsize=(10, 11), dpi=dpi, layout="constrained")
     axes = fig.subplots(len(PLOTS), 1, sharex=True)
     ref = rec.methods[0] if rec.methods else None
+    styles = robot_styles(rec.strategies)
     for ax, (col, title, span) in zip(axes, PLOTS, strict=True):
         for method in rec.methods:
             rows = rec.rows.get(method)
@@ -51,8 +74,8 @@ def plots_png(rec: Recording, dpi: int = 100) -> bytes:
                 lw=1.6,
                 markersize=4,
                 markevery=max(1, len(x) // 10),
-                label=METHOD_INFO[method].title,
-                **METHOD_INFO[method].mpl_style(),
+                label=robot_title(method, rec.strategies[method]),
+                **styles[method],
             )
         rows = rec.rows.get(ref) if ref else None
         if rows is not None and len(rows):

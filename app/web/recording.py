@@ -16,6 +16,7 @@ It is written as (:func:`package`):
 - ``timeseries.csv``: the plot rows of every robot (one tidy table);
 - ``plots.png``: the live plots of the same window (matplotlib; viser recordings drop GUI
   plots), drawn by :mod:`app.web.record_plots`;
+- ``robots.json``: every robot's label, strategy and parameters (its own settings included);
 - ``index.html``: a page that shows them together, and ``README.txt``
   (:mod:`app.web.record_page`).
 
@@ -30,6 +31,7 @@ import csv
 import dataclasses
 import html
 import io
+import json
 import math
 import threading
 import zipfile
@@ -197,8 +199,8 @@ def scene_html(rec: Recording, layers: dict[str, bool] | None = None) -> str:
 
 # -- numbers and plots ----------------------------------------------------------------------
 def timeseries_csv(rec: Recording) -> str:
-    """The plot rows of every robot: ``method``, ``rec_t`` (seconds into the recording, as
-    the scene's playback bar) and ROW_COLUMNS."""
+    """The plot rows of every robot: ``method`` (its label), ``rec_t`` (seconds into the
+    recording, as the scene's playback bar) and ROW_COLUMNS."""
     out = io.StringIO()
     w = csv.writer(out, lineterminator="\n")
     w.writerow(("method", "rec_t", *ROW_COLUMNS))
@@ -221,8 +223,24 @@ def package(rec: Recording, layers: dict[str, bool] | None = None) -> dict[str, 
         "scene.html": scene_html(rec, layers).encode(),
         "plots.png": plots_png(rec),
         "timeseries.csv": timeseries_csv(rec).encode(),
+        "robots.json": robots_json(rec).encode(),
         "README.txt": README.encode(),
     }
+
+
+def robots_json(rec: Recording) -> str:
+    """Every robot of the recording: its label (the ``method`` of timeseries.csv), strategy,
+    the settings that differ and all of its parameters in force."""
+    return json.dumps(
+        {
+            "source": rec.source,
+            "start": rec.start,
+            "duration": rec.duration,
+            "robots": rec.robots(),
+        },
+        indent=1,
+        default=str,
+    )
 
 
 def render(rec: Recording, fmt: str, layers: dict[str, bool] | None = None) -> bytes:
