@@ -374,10 +374,12 @@ class WorkerPool:
         return [w for w in self._workers if w.robots < self.robots_per_worker]
 
     def reserve(self, session: RemoteSession, methods: Sequence[str]) -> None:
-        """PoolFull unless the workers have room for the robots ``session`` would add."""
+        """PoolFull unless the workers have room for the robots ``session`` would add (its
+        robots not among ``methods`` are closed first: their slots count as free)."""
         with self._lock:
             need = len([m for m in methods if m not in session.parts])
-            room = sum(self.robots_per_worker - w.robots for w in self._workers)
+            freed = len([m for m in session.parts if m not in methods])
+            room = sum(self.robots_per_worker - w.robots for w in self._workers) + freed
             if need > room:
                 raise PoolFull(
                     f"the workers hold {self.n_workers} x {self.robots_per_worker}"

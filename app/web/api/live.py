@@ -168,11 +168,11 @@ def qp_of(sid: str, session: SessionView, method: str | None) -> dict[str, Any]:
         )
     return finite(
         {
+            **rec.to_dict(),  # (its "method" is the strategy's: the label goes below)
             "session": sid,
             "method": robot.method,
             "strategy": robot.strategy,
             "clock": frame.clock,
-            **rec.to_dict(),
         }
     )
 
