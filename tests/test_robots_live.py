@@ -20,6 +20,7 @@ from app.live.pool import WorkerPool
 from app.live.session import initial_intent
 from app.web import recording
 from app.web.api import RunManager, create_app
+from app.web.record_plots import plots_png
 from controller import strategy
 from controller.params import ControllerParams
 from pelvic_walk import Client, InvalidRequest
@@ -117,7 +118,10 @@ def _wait_run(client, run_id: str) -> dict[str, Any]:
 
 
 def _used(session, label: str) -> float | None:
-    """The gain robot ``label``'s strategy used at its last tick (the in-process engine)."""
+    """The gain robot ``label``'s strategy used at its last tick (the in-process engine), once
+    the loop has carried out the intent in force (the PUT waits for it only APPLY_TIMEOUT_S:
+    a busy machine may answer first)."""
+    assert session.wait_applied(session.intent, timeout=30) is not None
     return session.robots[label].session.walker.strategy.strategy.used_k
 
 
@@ -261,21 +265,6 @@ def test_a_strategys_own_parameter_in_the_api_and_on_the_next_tick(pool, gain_fi
             "gain.k = 99.0 is above the maximum 20.0 1/s"
         )
 
-        # the API's headless run takes the strategy's own parameters too
-        r = client.post("/api/runs", json={"method": "gain", "gain": {"k": 12},
-                                           "walk": {"n_steps": 1, "step_length": 0.2}})  # fmt: skip
-        assert r.status_code == 202, r.text
-        rec = _wait_run(client, r.json()["id"])
-        assert rec["status"] == "done", rec
-        assert rec["summary"]["method"] == "gain"
-        r = client.post("/api/runs", json={"robot": "gain,gain.k=12", "walk": {"n_steps": 1,
-                                           "step_length": 0.2}})  # fmt: skip
-        again = _wait_run(client, r.json()["id"])
-        for key in ("steps_completed", "waist_yaw_max_deg", "landing_error_max", "fell"):
-            assert again["summary"][key] == rec["summary"][key], key
-        r = client.post("/api/runs", json={"method": "gain", "gain": {"k": -1}})
-        assert r.status_code == 422 and "below the minimum" in r.text
-
         # the Python client: by label, a strategy's own parameter by its dotted name
         pw = Client("http://testserver", _http=client)
         assert [r["label"] for r in pw.robots()] == ["gain", "six"]
@@ -314,7 +303,7 @@ def test_a_recording_names_robots_by_label_with_their_parameters(pool):
         "mpc",
         "short",
     }
-    assert recording.plots_png(rec).startswith(b"\x89PNG")
+    assert plots_png(rec).startswith(b"\x89PNG")
     pool.close(session)
 
 
@@ -391,3 +380,29 @@ def test_robots_with_their_settings_in_worker_processes(gain_file):
         pool.close(session)
     finally:
         pool.stop()
+
+
+def test_a_headless_run_takes_a_strategys_own_parameters(pool, gain_file):
+    """``POST /api/runs`` with a strategy's own parameter, as a group or in a robot's form:
+    the same walk either way, and the range checked."""
+    gain_file("gain")
+    session = _open(pool, ["mpc"])
+    with TestClient(create_app(session)) as client:
+        r = client.post("/api/runs", json={"method": "gain", "gain": {"k": 12},
+                                           "walk": {"n_steps": 1, "step_length": 0.2}})  # fmt: skip
+        assert r.status_code == 202, r.text
+        rec = _wait_run(client, r.json()["id"])
+        assert rec["status"] == "done", rec
+        assert rec["summary"]["method"] == "gain"
+        r = client.post("/api/runs", json={"robot": "gain,gain.k=12", "walk": {"n_steps": 1,
+                                           "step_length": 0.2}})  # fmt: skip
+        again = _wait_run(client, r.json()["id"])
+        for key in ("steps_completed", "waist_yaw_max_deg", "landing_error_max", "fell"):
+            assert again["summary"][key] == rec["summary"][key], key
+        r = client.post("/api/runs", json={"method": "gain", "walk": {"n_steps": 1,
+                                           "step_length": 0.2}})  # fmt: skip
+        still = _wait_run(client, r.json()["id"])["summary"]  # its default gain: 0
+        assert still["waist_yaw_max_deg"] < 0.5 < rec["summary"]["waist_yaw_max_deg"]
+        r = client.post("/api/runs", json={"method": "gain", "gain": {"k": -1}})
+        assert r.status_code == 422 and "below the minimum" in r.text
+    pool.close(session)
