@@ -86,7 +86,7 @@ def api(client, live):
     [
         ({"method": "mpc", "force": [0, PUSH_FORCE_MAX + 1]}, "maximum"),
         ({"method": "redundancy", "force": [0, 60]}, "no robot 'redundancy'"),
-        ({"method": "moonwalk", "force": [0, 60]}, "method"),
+        ({"method": "moonwalk", "force": [0, 60]}, "no robot 'moonwalk'"),  # a label
         ({"method": "mpc", "force": [0, 60], "duration": -0.1}, "duration"),
     ],
 )
