@@ -112,8 +112,8 @@ def build_parser() -> argparse.ArgumentParser:
         default=None,
         metavar="NAME[,KEY=VALUE...][@LABEL]",
         help="a robot every session starts with: a strategy, its own settings over the shared "
-        "parameters and a label, e.g. --robot mpc --robot \"mpc,com.horizon=0.8@short "
-        "horizon\" (repeatable, at most 6; replaces --methods)",
+        'parameters and a label, e.g. --robot mpc --robot "mpc,com.horizon=0.8@short '
+        'horizon" (repeatable, at most 6; replaces --methods)',
     )
     add_strategy_argument(
         p,

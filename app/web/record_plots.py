@@ -35,7 +35,7 @@ def dsp_spans(t: np.ndarray, in_dsp: np.ndarray) -> list[tuple[float, float]]:
 
 
 # the line styles of a second, third... robot of one strategy (its colour kept)
-REPEAT_STYLES: tuple[tuple[str, str], ...] = ((":", "x"), ("-.", "+"), ((0, (1, 1, 6, 1)), "1"))
+REPEAT_STYLES: tuple[tuple[object, str], ...] = ((":", "x"), ("-.", "+"), ((0, (1, 1, 6, 1)), "1"))
 
 
 def robot_styles(strategies: dict[str, str]) -> dict[str, dict[str, object]]:
@@ -45,7 +45,7 @@ def robot_styles(strategies: dict[str, str]) -> dict[str, dict[str, object]]:
     seen: dict[str, int] = {}
     for label, name in strategies.items():
         info = METHOD_INFO.get(name)
-        style = dict(info.mpl_style()) if info is not None else {"color": "#000000"}
+        style: dict[str, object] = dict(info.mpl_style()) if info else {"color": "#000000"}
         k = seen.get(name, 0)
         seen[name] = k + 1
         if k:
