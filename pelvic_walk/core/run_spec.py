@@ -20,7 +20,6 @@ A spec may ask for pushes of another size (``push_std``, e.g. the robustness sec
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -70,7 +69,8 @@ def _check_override(name: str, value: Any, method: str) -> str:
     stored = f"{group}.{fname}"
     if group not in GROUPS and group != method:
         raise ValueError(
-            f"override {name!r}: a parameter of the strategy {group!r}, not of this run's {method!r}"
+            f"override {name!r}: a parameter of the strategy {group!r}, not of this run's "
+            f"{method!r}"
         )
     if stored in OWN_FIELDS:
         raise ValueError(f"override {name!r}: set it with the RunSpec's own field")
