@@ -300,3 +300,37 @@ def _fields_of(name: str):
     from controller.params import OWN_PARAMS, spec
 
     return spec(OWN_PARAMS[name]).items()
+
+
+def test_experiments_set_reaches_the_runs_whose_strategy_reads_it(knob, capsys):
+    """``experiments --set``: a paper parameter sets every run, a strategy's own only its
+    strategy's runs (the MPC's runs do not carry ``knob.k``); bad ones exit 2 in one line."""
+    import dataclasses
+
+    from app.cli.options import study_overrides
+    from app.experiments.definitions import QUICK, planned_runs
+    from app.experiments.sensitivity import plan
+
+    strategy.load_file(str(knob))
+    overrides = study_overrides(["pelvis.k_pel=0.3", "knob.k=12", "mpc.beta=1e-4"])
+    assert overrides == (("knob.k", 12.0), ("pelvis.beta", 1e-4), ("pelvis.k_pel", 0.3))
+    study = dataclasses.replace(QUICK, methods=(*QUICK.methods, "knob"), overrides=overrides)
+    specs = list(planned_runs(study))
+    assert {s.method for s in specs} >= {"fixed", "mpc", "knob"}
+    for s in specs:
+        ov = dict(s.overrides)
+        assert ov["pelvis.k_pel"] == 0.3 and ov["pelvis.beta"] == 1e-4
+        assert ("knob.k" in ov) == (s.method == "knob")
+        assert s.params().pelvis.k_pel == 0.3
+    knob_runs = [s for s in specs if s.method == "knob"]
+    assert knob_runs and all(s.params().own_params("knob").k == 12.0 for s in knob_runs)
+    for m, _ov, task in plan(study):
+        assert ("knob.k" in dict(task.cell.fixed)) == (m == "knob")
+    for bad, line in [
+        ("pelvis.k_pel=3", "pelvis.k_pel = 3.0 is above the maximum 1.0"),
+        ("walk.n_steps=4", "--set walk.n_steps: the study sets it for each run"),
+        ("knob.nope=1", "unknown parameter 'knob.nope'"),
+    ]:
+        assert cli_main(["experiments", "--out", "/nonexistent/o", "--set", bad]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and line in err, err

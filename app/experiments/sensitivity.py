@@ -212,7 +212,6 @@ def plan(study: Study) -> list[tuple[str, tuple[Override, ...], LimitTask]]:
         return []
     lo, hi, res = s.search
     tests = criteria(s.landings, s.kappas)
-    fixed = (("walk.n_steps", s.steps), *study.overrides)
     wanted = [(m, ov) for ov in grid_cells(s) for m in s.methods]
     wanted += [(m, c.overrides) for c in s.cells for m in c.methods]
     out: list[tuple[str, tuple[Override, ...], LimitTask]] = []
@@ -223,6 +222,7 @@ def plan(study: Study) -> list[tuple[str, tuple[Override, ...], LimitTask]]:
             continue
         seen.add(key)
         search = LimitSearch(lo, hi, res, names=tuple(tests), first=s.first)
+        fixed = (("walk.n_steps", s.steps), *study.overrides_for(m))
         task = LimitTask(Cell(len(out), key[1], fixed), m, search, tests)
         out.append((m, key[1], task))
     return out
