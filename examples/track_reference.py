@@ -6,11 +6,17 @@ beside the paper's MPC, which plans the same reference over the whole horizon:
 
     pelvic-walk simulate --strategy examples/track_reference.py --step-length 0.4
     pelvic-walk serve --strategy examples/track_reference.py
+
+Its gain is a parameter of its own (``Params`` below): a slider in its folder of the panel,
+``--set track_ref.gain=12`` on the command line, a sweep's axis:
+
+    pelvic-walk sweep --strategy examples/track_reference.py --methods track_ref \\
+        --set track_ref.gain=4,8,16 --measure summary --out sweep
 """
 
-from pelvic_walk import PelvisStrategy
+from dataclasses import dataclass
 
-GAIN = 8.0  # [1/s] a turn of error e [rad] is closed at e * GAIN rad/s: a 0.125 s lag
+from pelvic_walk import PelvisStrategy, param
 
 
 class TrackReference(PelvisStrategy):
@@ -19,5 +25,18 @@ class TrackReference(PelvisStrategy):
     name = "track_ref"
     label = "gain on theta_ref"
 
+    @dataclass(frozen=True)
+    class Params:
+        # a turn of error e [rad] is closed at e * gain rad/s: 8 is a 0.125 s lag
+        gain: float = param(
+            8.0,
+            min=0.0,
+            max=40.0,
+            step=0.5,
+            unit="1/s",
+            label="gain on the error",
+            help="rate per radian of error to theta_ref[0]; 0 holds the waist still",
+        )
+
     def waist_rate(self, s):
-        return GAIN * (s.theta_ref[0] - s.theta)  # [rad/s]
+        return self.params.gain * (s.theta_ref[0] - s.theta)  # [rad/s]

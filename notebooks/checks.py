@@ -403,3 +403,23 @@ def stopped_at(answer: Any, run: pw.Run) -> bool | None:
         "when the walk stopped, in seconds",
         "run.summary['strategy_error_time'], or the last t of run.series",
     )
+
+
+@_verdict
+def smallest_clean_gain(answer: Any, table: Any, column: str) -> bool | None:
+    """The smallest value of ``column`` in a sweep's ``table`` (``pw.sweep(...,
+    measure="summary")``) whose walk is clean."""
+    if column not in getattr(table, "columns", ()):
+        print(f"{NOT_YET} the table has no column {column!r}: pass the sweep's table and its name")
+        return False
+    clean = [float(v) for v, ok in zip(table[column], table["clean"], strict=True) if ok]
+    if not clean:
+        print(f"{NOT_YET} no walk of this sweep is clean: sweep larger values")
+        return False
+    return _number(
+        answer,
+        min(clean),
+        1e-9,
+        f"the smallest {column} whose walk is clean",
+        "the clean column of the table, read against the gain's column",
+    )

@@ -13,13 +13,18 @@ Walk, look, compare::
 
 Write how the pelvis turns (docs/STRATEGIES.md) and run it beside the paper's MPC::
 
+    @dataclass(frozen=True)
+    class Gain:
+        k: float = pw.param(8.0, min=0.0, max=40.0, unit="1/s", label="gain k")
+
     class TrackWithGain(pw.PelvisStrategy):
         name = "gain"
+        Params = Gain  # its own parameters: a slider, --set gain.k=V, **{"gain.k": V}
 
         def waist_rate(self, s):
-            return 8.0 * (s.theta_ref[0] - s.theta)  # [rad/s]
+            return self.params.k * (s.theta_ref[0] - s.theta)  # [rad/s]
 
-    mine = pw.simulate(strategy=TrackWithGain, step_length=0.35, steps=4)
+    mine = pw.simulate(strategy=TrackWithGain, step_length=0.35, steps=4, **{"gain.k": 12})
 
 Drive a served tool (``pelvic-walk serve``): ``pw.Client("http://127.0.0.1:8000")``.
 """
@@ -34,6 +39,7 @@ from typing import TYPE_CHECKING, Any
 # live worker that needs a walk does not load the HTTP client or the plots with it.
 _WHERE = {
     "PelvisStrategy": "controller.strategy",
+    "param": "controller.params",
     "StrategyError": "controller.strategy",
     "StrategyInputs": "controller.strategy",
     "StrategyLoadError": "controller.strategy",
@@ -57,6 +63,7 @@ _WHERE = {
 }
 
 if TYPE_CHECKING:
+    from controller.params import param
     from controller.strategy import (
         PelvisStrategy,
         StrategyError,
@@ -115,6 +122,7 @@ __all__ = [
     "StrategyLoadError",
     "analyze",
     "compare",
+    "param",
     "plot",
     "robot",
     "simulate",

@@ -2,7 +2,9 @@
 
 Every option of ``pelvic-walk simulate`` is a keyword of :func:`pelvic_walk.simulate` (dashes
 become underscores: ``--step-time`` -> ``step_time``, ``--pelvis-k-pel`` -> ``pelvis_k_pel``),
-and ``**{"pelvis.k_pel": 0.3}`` reaches a field by its dotted name as ``--set`` does. Values
+and ``**{"pelvis.k_pel": 0.3}`` reaches a field by its dotted name as ``--set`` does: a
+strategy's own parameter too (``**{"gain.k": 4}``), and a paper parameter by the name under the
+strategy that owns it (``**{"mpc.alpha": 2}`` is ``pelvis.alpha``). Values
 are checked by the same function as the command line's (``controller.params.check_value``),
 so a bad one raises ValueError with the line the CLI prints after ``error:``.
 """
@@ -17,7 +19,7 @@ from typing import Any
 
 from controller import strategy
 from controller.params import ControllerParams, check_value
-from pelvic_walk.core.params import fields, option_name
+from pelvic_walk.core.params import fields, meta_of, option_name
 
 BACKENDS = ("daqp", "osqp")
 
@@ -35,14 +37,14 @@ def _field_of(key: str) -> tuple[str, str, dict[str, Any]]:
     table = keywords()
     if key in table:
         return table[key]
-    group, dot, name = key.partition(".")
-    if dot:
-        for g, n, meta in fields():
-            if (g, n) == (group, name):
-                return g, n, meta
+    if "." in key:
+        try:
+            return meta_of(key)  # GROUP.NAME, a strategy's NAME.FIELD, an alias (mpc.alpha)
+        except ValueError:
+            pass
     raise ValueError(
         f"unknown parameter {key!r} (one of: {', '.join(table)}; or GROUP.NAME such as "
-        "'pelvis.k_pel')"
+        "'pelvis.k_pel', or a strategy's own NAME.FIELD)"
     )
 
 

@@ -120,23 +120,30 @@ def _show_figures_in_notebook() -> None:
 
 
 def differing_params(runs: Sequence[Any]) -> list[str]:
-    """Dotted names of the parameters (and ``seed``) that differ between the runs."""
+    """Dotted names of the parameters (and ``seed``) that differ between the runs: the
+    paper's, then strategies' own (``gain.k``: a run of another strategy has none)."""
     names: list[str] = []
     for group in GROUPS:
         for f in dataclasses.fields(getattr(ControllerParams(), group)):
             values = {repr(getattr(getattr(r.params, group), f.name)) for r in runs}
             if len(values) > 1:
                 names.append(f"{group}.{f.name}")
+    own = sorted({n for r in runs for n, _ in r.params.own})
+    names += [n for n in own if len({repr(param_value(r, n)) for r in runs}) > 1]
     if len({r.seed for r in runs}) > 1:
         names.append("seed")
     return names
 
 
 def param_value(run: Any, dotted: str) -> Any:
+    """A run's value of a parameter (``seed``, ``group.name``, a strategy's ``NAME.FIELD``;
+    None for another strategy's own parameter, which the run does not have)."""
     if dotted == "seed":
         return run.seed
     group, _, name = dotted.partition(".")
-    return getattr(getattr(run.params, group), name)
+    if group in GROUPS:
+        return getattr(getattr(run.params, group), name)
+    return run.params.value(dotted) if group == run.params.method else None
 
 
 def labels(runs: Sequence[Any], titles: bool = False) -> list[str]:

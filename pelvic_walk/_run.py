@@ -313,8 +313,9 @@ def simulate(
         backend: the QP solver of every layer, ``"daqp"`` or ``"osqp"``.
         **params: any other parameter by its command-line name with underscores
             (``step_time=1.0``, ``horizon=1.2``, ``arms=False``, ``pelvis_k_pel=0.3``) or by
-            its dotted name (``**{"pelvis.k_pel": 0.3}``); ``pelvic-walk simulate --help``
-            lists them with their ranges.
+            its dotted name (``**{"pelvis.k_pel": 0.3}``), a strategy's own parameter by
+            ``NAME.FIELD`` (``**{"gain.k": 12}``: its ``Params``, docs/STRATEGIES.md);
+            ``pelvic-walk simulate --help`` lists the paper's with their ranges.
 
     Raises:
         ValueError: a bad value, with the one line the command line prints.

@@ -51,7 +51,9 @@ def sweep(
         ray: ``True`` for a local Ray instance, or a cluster's address (``pelvic-walk[cluster]``).
         out: a folder for the CLI's files (table, figures, README), or None.
         **axes: the grid, parameters by keyword as :func:`simulate` takes them, each a list of
-            values (an axis) or one value (fixed): ``dsp_ratio=[0.1, 0.2], steps=4``.
+            values (an axis) or one value (fixed): ``dsp_ratio=[0.1, 0.2], steps=4``; a
+            strategy's own parameter by its dotted name, ``**{"gain.k": [4, 8, 16]}`` (the
+            other methods' rows of cells that differ only there share one run).
 
     Raises:
         ValueError: a bad grid or method, one line (``pelvic-walk sweep``'s).

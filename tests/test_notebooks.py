@@ -284,3 +284,18 @@ def test_a_notebook_runs_through_jupyter_nbconvert(tmp_path):
     )
     assert "STOPPED by its strategy" in text and ("✓" in text or "✗" in text)
     assert not NAN.search(text), text
+
+
+def test_the_check_of_the_smallest_clean_gain_reads_the_sweeps_table(capsys):
+    import pandas as pd
+
+    checks = _checks()
+    table = pd.DataFrame({"tuned.gain": [1.0, 4.0, 8.0, 16.0], "clean": [False, False, True, True]})
+    assert checks.smallest_clean_gain(..., table, "tuned.gain").ok is None
+    assert checks.smallest_clean_gain(8, table, "tuned.gain").ok is True
+    assert checks.smallest_clean_gain(16, table, "tuned.gain").ok is False
+    assert checks.smallest_clean_gain(8, table, "gain").ok is False  # no such column
+    none = table.assign(clean=False)
+    assert checks.smallest_clean_gain(8, none, "tuned.gain").ok is False
+    out = capsys.readouterr().out
+    assert "sweep larger values" in out and "no column 'gain'" in out

@@ -26,6 +26,7 @@ from app.cli.options import (
     params_from_args,
     positive_int,
     robot_spec,
+    study_overrides,
 )
 from app.cli.sweep import add_sweep_arguments
 from controller import strategy
@@ -264,6 +265,7 @@ def build_parser() -> argparse.ArgumentParser:
         "FILE.py[:Class]: your own pelvis strategy, studied beside the MPC in section 10 "
         "(its own row: longest step, waist, energy, kappa, push survival; repeatable)",
     )
+    add_set_argument(p)
     add_jobs_argument(p)
     add_ray_argument(p)
 
@@ -505,12 +507,18 @@ def main(argv: list[str] | None = None) -> int:
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main
 
+            try:
+                overrides = study_overrides(args.param_set)
+            except ValueError as exc:
+                print(f"pelvic-walk experiments: error: {exc}", file=sys.stderr)
+                return 2
             return experiments_main(
                 args.out,
                 quick=args.quick,
                 jobs=args.jobs,
                 ray=args.ray,
                 strategies=tuple(args.strategies),
+                overrides=overrides,
             )
         if args.command == "sweep":
             from app.cli.sweep import sweep_main

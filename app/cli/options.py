@@ -15,6 +15,7 @@ from typing import Any
 
 from controller.params import ControllerParams, check_value
 from pelvic_walk.core.params import convert, fields, option_name, parse_assignment, split_list
+from pelvic_walk.core.run_spec import OWN_FIELDS
 
 
 def positive_int(text: str) -> int:
@@ -223,3 +224,17 @@ def params_from_args(
         group, name, value = parse_assignment(text)
         groups.setdefault(group, {})[name] = value
     return (base or ControllerParams()).replace(**top, **groups)
+
+
+def study_overrides(texts: Iterable[str]) -> tuple[tuple[str, Any], ...]:
+    """``--set GROUP.NAME=VALUE`` items as a study's overrides (``("group.name", value)`` by
+    their stored names, sorted; ValueError with one line for a bad one, or for a parameter
+    the study sets itself per run)."""
+    out: dict[str, Any] = {}
+    for text in texts:
+        group, name, value = parse_assignment(text)
+        dotted = f"{group}.{name}"
+        if dotted in OWN_FIELDS:
+            raise ValueError(f"--set {dotted}: the study sets it for each run")
+        out[dotted] = value
+    return tuple(sorted(out.items()))

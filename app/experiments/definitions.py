@@ -33,7 +33,7 @@ from typing import Any
 
 from app.experiments import paper
 from controller import strategy
-from controller.params import LATERAL_MODES, ControllerParams
+from controller.params import GROUPS, LATERAL_MODES, ControllerParams
 from controller.strategy import FIXED, MPC, REDUNDANCY
 from pelvic_walk.core.run_spec import (
     DISTURBANCE,
@@ -193,13 +193,32 @@ class Study:
         names = dict.fromkeys([*examples, *yours])  # in order, once each
         return tuple(m for m in names if m not in self.methods)
 
+    def overrides_for(self, method: str) -> tuple[Override, ...]:
+        """The study's overrides a method's runs take: the paper's parameters, and a
+        strategy's own ones only for that strategy (``experiments --set gain.k=12`` changes
+        the runs of ``gain``, not the MPC's)."""
+        return tuple(
+            (name, value)
+            for name, value in self.overrides
+            if name.partition(".")[0] in GROUPS or name.partition(".")[0] == method
+        )
+
     def figure_run(self, method: str, step_length: float, arms: bool = True) -> RunSpec:
         """The unseeded run every figure section shares at one (method, length)."""
-        return RunSpec(method, length(step_length), self.n_steps, arms, None, self.overrides)
+        return RunSpec(
+            method, length(step_length), self.n_steps, arms, None, self.overrides_for(method)
+        )
 
     def energy_runs(self, method: str, step_length: float) -> list[RunSpec]:
         return [
-            RunSpec(method, length(step_length), self.energy_steps, True, seed, self.overrides)
+            RunSpec(
+                method,
+                length(step_length),
+                self.energy_steps,
+                True,
+                seed,
+                self.overrides_for(method),
+            )
             for seed in range(self.energy_repeats)
         ]
 
@@ -210,7 +229,7 @@ class Study:
             return []
         x = length(f.step_length)
         return [
-            RunSpec(method, x, f.steps, True, seed, self.overrides, push_std=f.force)
+            RunSpec(method, x, f.steps, True, seed, self.overrides_for(method), push_std=f.force)
             for seed in range(f.walks)
         ]
 
@@ -218,13 +237,17 @@ class Study:
         """MPC at one figure length with the reference angle computed from the state now,
         held over the horizon (no prediction; ``pelvis.reference``)."""
         extra = ((REFERENCE, "now"),)
-        return RunSpec(MPC, length(step_length), self.n_steps, True, None, self.overrides + extra)
+        return RunSpec(
+            MPC, length(step_length), self.n_steps, True, None, self.overrides_for(MPC) + extra
+        )
 
     def lateral_run(self, mode: str, step_length: float) -> RunSpec:
         """MPC at one figure length with one reading of the lateral distance (the default
         mode's run is the figure run)."""
         extra = () if mode == _DEFAULT_MODE else ((LATERAL, mode),)
-        return RunSpec(MPC, length(step_length), self.n_steps, True, None, self.overrides + extra)
+        return RunSpec(
+            MPC, length(step_length), self.n_steps, True, None, self.overrides_for(MPC) + extra
+        )
 
     def is_figure_run(self, spec: RunSpec) -> bool:
         """Whether ``spec`` is the figure run of its (method, length), arms on."""

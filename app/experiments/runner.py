@@ -25,6 +25,7 @@ import sys
 import time
 from datetime import UTC, datetime
 from pathlib import Path
+from typing import Any
 
 from app.experiments import limits, sensitivity
 from app.experiments.analysis import analyse
@@ -199,13 +200,19 @@ def run_study(study: Study, backend: Backend) -> StudyRuns:
 
 
 def command_of(
-    quick: bool, jobs: int | None, ray: str | None, out: Path, strategies: tuple[str, ...] = ()
+    quick: bool,
+    jobs: int | None,
+    ray: str | None,
+    out: Path,
+    strategies: tuple[str, ...] = (),
+    overrides: tuple[tuple[str, Any], ...] = (),
 ) -> str:
     """The command line that reruns this study."""
     parts = [PROG, "--out", str(out)]
     if quick:
         parts.append("--quick")
     parts += [f"--strategy {s}" for s in strategies]
+    parts += [f"--set {name}={value}" for name, value in overrides]
     if jobs:
         parts += ["--jobs", str(jobs)]
     if ray is not None:
@@ -219,12 +226,16 @@ def main(
     jobs: int | None = None,
     ray: str | None = None,
     strategies: tuple[str, ...] = (),
+    overrides: tuple[tuple[str, Any], ...] = (),
 ) -> int:
     """Run the study (``quick``: the smoke set) on the local pool or Ray and write
     results.json, figures/ and report.md into ``out``; ``strategies`` (``FILE.py[:Class]``,
-    loaded already) are studied beside the MPC in section 10. Exit 0; 1 if a run crashed; 2
-    (one line) if Ray is missing or cannot be reached."""
-    study = dataclasses.replace(QUICK if quick else FULL, strategies=tuple(strategies))
+    loaded already) are studied beside the MPC in section 10; ``overrides`` (``("group.name",
+    value)``, checked) set parameters of every run (a strategy's own: its runs only). Exit 0;
+    1 if a run crashed; 2 (one line) if Ray is missing or cannot be reached."""
+    study = dataclasses.replace(
+        QUICK if quick else FULL, strategies=tuple(strategies), overrides=tuple(overrides)
+    )
     n_jobs = jobs or os.cpu_count() or 1
     out = Path(out)
     (out / "figures").mkdir(parents=True, exist_ok=True)
@@ -242,7 +253,7 @@ def main(
     finally:
         backend.close()
     meta = Meta(
-        command=command_of(quick, jobs, ray, out, tuple(strategies)),
+        command=command_of(quick, jobs, ray, out, tuple(strategies), tuple(overrides)),
         study=study.name,
         date_utc=started.strftime("%Y-%m-%d %H:%M UTC"),
         duration_s=time.perf_counter() - t0,

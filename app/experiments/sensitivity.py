@@ -9,26 +9,37 @@ readings). Each search brackets the clean limit at the default thresholds (landi
 2 cm, kappa(legs) below 1000) and with one threshold changed
 (``pelvic_walk.core.measure.criteria``), from the same runs, and keeps every run's outcome.
 
-Only the MPC reads the ``pelvis`` parameters (the reference angle and the pelvic MPC,
-``controller/walker.py``), so the fixed pelvis runs once per value of the others: its row
-serves every k_pel (:func:`effective`). Every MPC row is compared with the fixed pelvis's row
-at the same parameters it reads (:meth:`SensitivitySection.gain`).
+A method does not read every parameter (:func:`effective`), so a run serves every cell that
+differs only in parameters it does not read: the fixed pelvis runs once per value of the
+others, its row serves every k_pel. Which parameters are whose is the strategy registry's
+(``controller.strategy.own_fields``: the MPC owns its weights and limits, ``pelvis.alpha``,
+``pelvis.beta``, ``pelvis.angle_limit_deg``, ``pelvis.acc_limit``; redundancy
+``ik.redundancy_weight``; a user's strategy its ``Params``): a strategy reads its own and no
+other strategy's. The rest of the Pelvic MPC group (k_pel, the lateral distance's reading, ...)
+shapes the reference angle theta_ref of eq. (27)-(33), which a strategy reads only through
+``s.theta_ref``: the paper's fixed pelvis and redundancy never do (:data:`IGNORE_REFERENCE`).
+Every MPC row is compared with the fixed pelvis's row at the same parameters it reads
+(:meth:`SensitivitySection.gain`).
 """
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
 from app.experiments.definitions import Sensitivity, Study
-from controller.params import ControllerParams
-from controller.strategy import FIXED, MPC
+from controller import strategy
+from controller.params import ControllerParams, PelvisMpcParams
+from controller.strategy import FIXED, MPC, REDUNDANCY
 from pelvic_walk.core.grid import Cell
 from pelvic_walk.core.measure import LimitSearch, LimitTask, criteria, outcome_of
 from pelvic_walk.core.metrics import KAPPA_SINGULAR
 from pelvic_walk.core.run_spec import Override, length
 
-MPC_ONLY_GROUPS = ("pelvis",)  # parameter groups only the MPC reads
+# the paper's strategies whose waist rate does not depend on the reference angle theta_ref
+# (eq. 27-33): fixed pins 0, redundancy leaves the waist to the IK (controller/strategy.py)
+IGNORE_REFERENCE = (FIXED, REDUNDANCY)
 # what a row keeps of each run (besides its length and outcome)
 RUN_KEYS = (
     "fell",
@@ -41,12 +52,35 @@ RUN_KEYS = (
 )
 
 
+def owner(name: str) -> str | None:
+    """The registered strategy that owns the parameter stored as ``name`` (the registry's
+    ``own_fields``), or None: a parameter every strategy's walk reads."""
+    for n in strategy.names():
+        if name in strategy.own_fields(n).values():
+            return n
+    return None
+
+
+def reference_params() -> tuple[str, ...]:
+    """The parameters of the reference angle theta_ref (eq. 27-33): the Pelvic MPC group's
+    that the MPC does not own (its weights and limits are its own, the rest is the
+    reference's that the walker computes for every strategy)."""
+    mine = set(strategy.own_fields(MPC).values())
+    names = (f"pelvis.{f.name}" for f in dataclasses.fields(PelvisMpcParams))
+    return tuple(n for n in names if n not in mine)
+
+
+def reads_param(method: str, name: str) -> bool:
+    """Whether a run of ``method`` reads the parameter stored as ``name``."""
+    own = owner(name)
+    if own is not None:
+        return own == method
+    return not (method in IGNORE_REFERENCE and name in reference_params())
+
+
 def effective(method: str, overrides: tuple[Override, ...]) -> tuple[Override, ...]:
     """The overrides ``method`` reads (sorted by name)."""
-    keep = [
-        (n, v) for n, v in overrides if method == MPC or n.partition(".")[0] not in MPC_ONLY_GROUPS
-    ]
-    return tuple(sorted(keep))
+    return tuple(sorted((n, v) for n, v in overrides if reads_param(method, n)))
 
 
 def grid_cells(s: Sensitivity) -> list[tuple[Override, ...]]:
@@ -59,21 +93,13 @@ def defaults(s: Sensitivity) -> dict[str, Any]:
     """Every parameter the section varies -> its default."""
     p = ControllerParams()
     names = [s.rows[0], s.columns[0]] + [n for c in s.cells for n, _ in c.overrides]
-    out = {}
-    for name in names:
-        group, _, field_name = name.partition(".")
-        out[name] = getattr(getattr(p, group), field_name)
-    return out
+    return {name: p.value(name) for name in names}
 
 
 def _without_defaults(overrides: tuple[Override, ...]) -> tuple[Override, ...]:
     """Overrides that only restate a default are dropped, so equal runs share one key."""
     p = ControllerParams()
-    return tuple(
-        (n, v)
-        for n, v in overrides
-        if getattr(getattr(p, n.partition(".")[0]), n.partition(".")[2]) != v
-    )
+    return tuple((n, v) for n, v in overrides if p.value(n) != v)
 
 
 def reads(method: str, overrides: tuple[Override, ...]) -> tuple[Override, ...]:
@@ -186,7 +212,6 @@ def plan(study: Study) -> list[tuple[str, tuple[Override, ...], LimitTask]]:
         return []
     lo, hi, res = s.search
     tests = criteria(s.landings, s.kappas)
-    fixed = (("walk.n_steps", s.steps), *study.overrides)
     wanted = [(m, ov) for ov in grid_cells(s) for m in s.methods]
     wanted += [(m, c.overrides) for c in s.cells for m in c.methods]
     out: list[tuple[str, tuple[Override, ...], LimitTask]] = []
@@ -197,6 +222,7 @@ def plan(study: Study) -> list[tuple[str, tuple[Override, ...], LimitTask]]:
             continue
         seen.add(key)
         search = LimitSearch(lo, hi, res, names=tuple(tests), first=s.first)
+        fixed = (("walk.n_steps", s.steps), *study.overrides_for(m))
         task = LimitTask(Cell(len(out), key[1], fixed), m, search, tests)
         out.append((m, key[1], task))
     return out

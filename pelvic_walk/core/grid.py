@@ -10,7 +10,9 @@ A grid comes from repeated ``--set GROUP.NAME=V1,V2,...`` options or from a YAML
     methods: [fixed, mpc]             # optional; default all three
     measure: limit                    # optional; limit | summary (default limit)
 
-Any field of ``controller/params.py`` can be named by its dotted name; each value is converted
+Any field of ``controller/params.py`` can be named by its dotted name, and a strategy's own
+parameter by ``NAME.FIELD`` (``gain.k: [2, 4, 8]``: the other methods' runs do not read it, so
+each of theirs is the same run for every value); each value is converted
 and range-checked by :func:`app.cli.options.parse_assignment`, the same check as ``simulate
 --set``. The cells are the cartesian product of the axes (the first axis varies slowest); an
 axis of one value counts as fixed. Every problem raises :class:`GridError` with one line.
@@ -26,7 +28,7 @@ from pathlib import Path
 from typing import Any
 
 from controller import strategy
-from controller.params import ControllerParams
+from controller.params import GROUPS, ControllerParams
 from pelvic_walk.core.params import parse_assignment, split_list
 from pelvic_walk.core.run_spec import RunSpec
 
@@ -64,8 +66,14 @@ class Cell:
         return " ".join(f"{name}={value}" for name, value in self.values) or "(one cell)"
 
     def spec(self, method: str, step_length: float | None = None) -> RunSpec:
-        """The run of this cell for ``method`` (``step_length`` overrides the cell's own)."""
-        chosen = dict(self.fixed) | dict(self.values)
+        """The run of this cell for ``method`` (``step_length`` overrides the cell's own).
+        Another strategy's own parameters (``gain.k`` for the MPC) are not the method's: its
+        run is the same for every value of them."""
+        chosen = {
+            name: value
+            for name, value in (*self.fixed, *self.values)
+            if name.partition(".")[0] in GROUPS or name.partition(".")[0] == method
+        }
         walk = ControllerParams().walk
         step = chosen.pop("walk.step_length", walk.step_length)
         n_steps = chosen.pop("walk.n_steps", walk.n_steps)

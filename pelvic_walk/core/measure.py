@@ -374,18 +374,50 @@ class LimitTask(_TaskBase):
         return self.search.result() | self._tail()
 
 
-Task = SummaryTask | LimitTask
+class SameRuns(_TaskBase):
+    """A (cell, method) whose runs are another task's (the same specs): no run of its own;
+    its row is that task's limits or summary, with ``runs`` 0 (counted once, there)."""
+
+    def __init__(self, cell: Cell, method: str, same: Any):
+        super().__init__(cell, method)
+        self.same = same
+
+    def next_job(self) -> None:
+        return None
+
+    def record(self, job: tuple[Any, tuple[Any, ...]], result: Outcome) -> None:
+        raise RuntimeError("a task sharing another's runs makes none")
+
+    def jobs_left_estimate(self) -> int:
+        return 0
+
+    def row(self) -> dict[str, Any]:
+        return self.same.row() | {"runs": 0, "wall_s": 0.0}
+
+
+Task = SummaryTask | LimitTask | SameRuns
 
 
 def make_tasks(
     cells: list[Cell], methods: tuple[str, ...], measure: str, run: RunFunction = run_one
 ) -> list[Task]:
-    """One task per (cell, method), cells in grid order, methods in the given order."""
-    if measure == "limit":
-        return [LimitTask(cell, m, run=run) for cell in cells for m in methods]
-    if measure == "summary":
-        return [SummaryTask(cell, m, run=run) for cell in cells for m in methods]
-    raise ValueError(f"unknown measure {measure!r}")
+    """One task per (cell, method), cells in grid order, methods in the given order. A cell
+    whose run of a method is an earlier cell's (they differ only in another strategy's own
+    parameter, ``gain.k`` for the MPC) shares that cell's runs (:class:`SameRuns`)."""
+    if measure not in ("limit", "summary"):
+        raise ValueError(f"unknown measure {measure!r}")
+    make = LimitTask if measure == "limit" else SummaryTask
+    out: list[Task] = []
+    first: dict[tuple[str, RunSpec], Any] = {}
+    for cell in cells:
+        for m in methods:
+            key = (m, cell.spec(m))
+            if key in first:
+                out.append(SameRuns(cell, m, first[key]))
+            else:
+                first[key] = task = make(cell, m, run=run)
+                out.append(task)
+    return out
 
 
 def check_runs(grid: Grid) -> None:

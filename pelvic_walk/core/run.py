@@ -23,7 +23,10 @@ __all__ = ["SUMMARY_KEYS", "Hook", "RunConfig", "Session", "run", "spec_of", "su
 
 def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:
     """The study's :class:`RunSpec` of these parameters: its own fields (method, length, steps,
-    arms, seed) and every other parameter that differs from its default as an override.
+    arms, seed) and every other parameter that differs from its default as an override, the
+    strategy's own parameters (``gain.k``) among them. Other strategies' own values, which
+    ``params`` may carry (a live robot's shared settings), change nothing in this walk and
+    are left out.
 
     ``spec_of(p, n).config()`` is the run the study makes of that cell with seed ``n`` (its
     repeat n: the same start perturbation, the same pushes from the same stream), so
@@ -37,6 +40,8 @@ def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:
             name, value = f"{group}.{f.name}", getattr(ours, f.name)
             if name not in OWN_FIELDS and value != getattr(theirs, f.name):
                 overrides.append((name, value))
+    prefix = f"{params.method}."
+    overrides += [(name, value) for name, value in params.own if name.startswith(prefix)]
     spec = RunSpec(
         params.method,
         params.walk.step_length,
@@ -45,7 +50,10 @@ def spec_of(params: ControllerParams, seed: int | None = None) -> RunSpec:
         seed,
         tuple(overrides),
     )  # (a user's strategy: the spec takes its file from the registry)
-    if spec.params() != params:  # a parameter outside the groups (none today)
+    walked = dataclasses.replace(
+        params, own=tuple((n, v) for n, v in params.own if n.startswith(prefix))
+    )
+    if spec.params() != walked:  # a parameter outside the groups (none today)
         raise ValueError("these parameters have no study run spec")
     return spec
 

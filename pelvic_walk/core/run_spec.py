@@ -1,11 +1,14 @@
 """One closed-loop run as plain data: :class:`RunSpec` (what the study and a sweep run).
 
 A spec is method, step length, steps, arm swing, seed, and any other parameter of
-``controller/params.py`` as ``("group.name", value)`` overrides. It crosses process and Ray
+``controller/params.py`` as ``("group.name", value)`` overrides, or one of the strategy's own
+(``("gain.k", 4.0)``: its ``Params``); a name under a strategy for a paper parameter
+(``mpc.alpha``) is stored by the paper's name (``pelvis.alpha``). It crosses process and Ray
 boundaries as it is (no MuJoCo or Pinocchio object): a worker builds its own run from
 :meth:`RunSpec.config`. The method is a registered pelvis strategy (``controller.strategy``);
 a user's strategy travels as its file (``strategy_file``: the path and class), which a worker
-that does not know the name yet loads.
+that does not know the name yet loads (before it reads the overrides: its own parameters are
+known once it is loaded).
 
 A *seeded* spec is one of the study's repeats: a 0.01 rad perturbation of the initial state and
 a horizontal force on the torso through the whole run, each axis N(0, :data:`DISTURBANCE`)
@@ -17,13 +20,13 @@ A spec may ask for pushes of another size (``push_std``, e.g. the robustness sec
 
 from __future__ import annotations
 
-import dataclasses
 import os
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
 from controller import strategy
-from controller.params import GROUPS, ControllerParams
+from controller.params import GROUPS, ControllerParams, check_value
+from pelvic_walk.core.params import meta_of
 
 if TYPE_CHECKING:
     from pelvic_walk.core.session import RunConfig
@@ -51,19 +54,32 @@ def length(x: float) -> float:
     return round(float(x), 3)
 
 
-def _check_override(name: str, value: Any) -> None:
-    group, _, fname = name.partition(".")
-    if group not in GROUPS:
-        raise ValueError(f"override {name!r}: the group must be one of {', '.join(GROUPS)}")
-    names = {f.name for f in dataclasses.fields(getattr(ControllerParams(), group))}
-    if fname not in names:
-        raise ValueError(f"override {name!r}: {group} has no parameter {fname!r}")
-    if name in OWN_FIELDS:
+def _check_override(name: str, value: Any, method: str) -> str:
+    """The stored name of an override of a run of ``method``, checked: a known parameter (the
+    paper's ``group.name``, a name under a strategy such as ``mpc.alpha``, or ``method``'s own
+    ``NAME.FIELD``), not one of the spec's own fields, a single value in its range."""
+    try:
+        group, fname, meta = meta_of(name)
+    except ValueError:
+        mine = ", ".join(strategy.own_fields(method)) or "none"
+        raise ValueError(
+            f"override {name!r}: no such parameter (GROUP.NAME of controller/params.py, or "
+            f"NAME.FIELD of a strategy's own; {method}'s: {mine})"
+        ) from None
+    stored = f"{group}.{fname}"
+    if group not in GROUPS and group != method:
+        raise ValueError(
+            f"override {name!r}: a parameter of the strategy {group!r}, not of this run's "
+            f"{method!r}"
+        )
+    if stored in OWN_FIELDS:
         raise ValueError(f"override {name!r}: set it with the RunSpec's own field")
     try:
         hash(value)  # the spec is a dict key
     except TypeError:
         raise ValueError(f"override {name!r}: {value!r} is not a single value") from None
+    check_value(group, fname, value, meta)
+    return stored
 
 
 @dataclass(frozen=True)
@@ -71,7 +87,8 @@ class RunSpec:
     """One closed-loop run; repeats differ by ``seed`` (see the module docstring).
 
     ``overrides`` sets any other parameter of :class:`ControllerParams`, as ``("group.name",
-    value)`` pairs (kept sorted by name, so equal specs compare and hash equal).
+    value)`` pairs, or the strategy's own (``("gain.k", 4.0)``), kept by their stored names and
+    sorted (equal specs compare and hash equal).
     """
 
     method: str  # a registered strategy's name
@@ -96,12 +113,11 @@ class RunSpec:
                 raise ValueError(f"{self.strategy_file} defines no strategy {self.method!r}")
         else:
             object.__setattr__(self, "strategy_file", strategy.info(self.method).source)
-        for name, value in self.overrides:
-            _check_override(name, value)
-        names = [name for name, _ in self.overrides]
+        checked = [(_check_override(n, v, self.method), v) for n, v in self.overrides]
+        names = [name for name, _ in checked]
         if len(set(names)) != len(names):
             raise ValueError(f"an override is given twice: {names}")
-        object.__setattr__(self, "overrides", tuple(sorted(self.overrides, key=lambda o: o[0])))
+        object.__setattr__(self, "overrides", tuple(sorted(checked, key=lambda o: o[0])))
 
     @property
     def perturbation(self) -> float:

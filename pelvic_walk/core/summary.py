@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from controller.kinematics import KAPPA_CAP
+from controller.strategy import own_fields
 from pelvic_walk.core.metrics import KAPPA_SINGULAR, LANDING_ERROR_CLEAN
 
 if TYPE_CHECKING:
@@ -235,6 +236,9 @@ def summarize(session: Session) -> dict[str, Any]:
         # [ms] its waist_rate calls: a strategy slower than the 5 ms tick cannot run live
         "strategy_ms_median": float(np.median(strategy_ms)) if len(strategy_ms) else 0.0,
         "strategy_ms_max": float(np.max(strategy_ms)) if len(strategy_ms) else 0.0,
+        # the strategy's own parameters in force, by NAME.FIELD (its Params, and the paper's
+        # it owns: mpc.alpha ...); {} for a strategy without any
+        "own_params": {name: p.value(name) for name in own_fields(p.method)},
         "servo_saturation_substeps": int(world.saturated_substeps),
         "speed_limited_ticks": int(session.speed_limited_ticks),
         "solver_failures_by_layer": dict(session.walker.failure_counts),
