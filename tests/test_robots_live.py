@@ -29,8 +29,7 @@ from pelvic_walk.core import robots
 GAIN = '''
 from dataclasses import dataclass
 
-from controller.params import param
-from pelvic_walk import PelvisStrategy
+from pelvic_walk import PelvisStrategy, param
 
 
 class Gain(PelvisStrategy):
