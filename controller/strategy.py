@@ -56,6 +56,11 @@ from controller.params import (
 from controller.pelvis_mpc import PelvisMpc, PelvisPlan
 
 FIXED, REDUNDANCY, MPC = "fixed", "redundancy", "mpc"  # the paper's three methods
+# names a strategy may not take: its own parameters are named NAME.FIELD beside the paper's
+# groups, and the API's parameter requests hold these fields beside the groups
+RESERVED_NAMES = frozenset(
+    (*GROUPS, "method", "methods", "robot", "robots", "own", "control_dt", "params", "strategy")
+)
 NAME_PATTERN = re.compile(r"^[A-Za-z][A-Za-z0-9_.-]{0,39}$")  # a robot key: URLs, CLI lists
 
 
@@ -297,6 +302,11 @@ def register(
         raise ValueError(
             f"{where}: name must be 1-40 letters, digits, '_', '.' or '-', starting with a "
             f"letter, got {name!r}"
+        )
+    if name in RESERVED_NAMES:
+        raise ValueError(
+            f"{where}: the name {name!r} is a parameter group's or a request field's; choose "
+            "another (it names the strategy's own parameters NAME.FIELD)"
         )
     if cls.waist_rate is PelvisStrategy.waist_rate:
         raise ValueError(f"{where}: {cls.__name__} does not define waist_rate(self, s)")

@@ -334,3 +334,18 @@ def test_experiments_set_reaches_the_runs_whose_strategy_reads_it(knob, capsys):
         assert cli_main(["experiments", "--out", "/nonexistent/o", "--set", bad]) == 2
         err = capsys.readouterr().err.strip()
         assert len(err.splitlines()) == 1 and line in err, err
+
+
+@pytest.mark.parametrize("name", ["walk", "pelvis", "robot", "robots", "methods"])
+def test_a_strategy_may_not_take_a_groups_or_a_request_fields_name(tmp_path, name):
+    """Its own parameters are named NAME.FIELD beside the paper's groups, and the API's
+    parameter requests hold these fields: such a name would be ambiguous, so it is refused."""
+    path = tmp_path / f"s_{name}.py"
+    path.write_text(
+        "from pelvic_walk import PelvisStrategy\n\n"
+        f"class S(PelvisStrategy):\n    name = {name!r}\n\n"
+        "    def waist_rate(self, s):\n        return 0.0\n"
+    )
+    with pytest.raises(strategy.StrategyLoadError, match=f"the name '{name}' is a parameter"):
+        strategy.load_file(str(path))
+    assert not strategy.is_registered(name)
