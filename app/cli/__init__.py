@@ -131,6 +131,16 @@ def build_parser() -> argparse.ArgumentParser:
         "threads of this process)",
     )
     p.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="run the robots of every live session on a Ray cluster at ADDRESS, or without one "
+        "on a local Ray instance; the seats are what the cluster holds at start "
+        "(docs/TEACHING.md, 'A class on a Ray cluster'; pip install 'pelvic-walk[cluster]')",
+    )
+    p.add_argument(
         "--sessions",
         choices=("shared", "private"),
         default=None,
@@ -503,6 +513,7 @@ def main(argv: list[str] | None = None) -> int:
                 trusted_proxies=args.trusted_proxies,
                 robots=args.robots,
                 param_set=args.param_set,
+                ray=args.ray,
             )
         if args.command == "experiments":
             from app.experiments.runner import main as experiments_main

@@ -61,13 +61,14 @@ class WorkerDeath:
     exitcode: int | None
     time: float  # time.time()
     sessions: tuple[str, ...]  # the sessions it held, restarted
+    where: str = ""  # " on node ..." (a Ray actor)
 
     def describe(self) -> str:
         when = time.strftime("%H:%M:%S", time.localtime(self.time))
         what = f"exit code {self.exitcode}" if self.exitcode is not None else "lost"
         n = len(self.sessions)
         return (
-            f"worker {self.worker} (pid {self.pid}) stopped at {when} ({what}); "
+            f"worker {self.worker} (pid {self.pid}{self.where}) stopped at {when} ({what}); "
             f"{n} session{'s' if n != 1 else ''} restarted"
         )
 
@@ -275,7 +276,8 @@ class WorkerPool:
 
     @property
     def in_process(self) -> bool:
-        return not isinstance(self.engine, ProcessEngine)
+        """The robots run in threads of this process (the in-process engine)."""
+        return isinstance(self.engine, InProcessEngine)
 
     # -- workers ---------------------------------------------------------------------------
     def start(self) -> WorkerPool:
@@ -343,7 +345,12 @@ class WorkerPool:
             held = {s.sid: s for s, _m in dead.parts.values()}
             self.deaths.append(
                 WorkerDeath(
-                    dead.index, dead.process.pid, dead.process.exitcode, time.time(), tuple(held)
+                    dead.index,
+                    dead.process.pid,
+                    dead.process.exitcode,
+                    time.time(),
+                    tuple(held),
+                    getattr(dead.process, "where", ""),
                 )
             )
             log.error(self.deaths[-1].describe())
@@ -440,7 +447,7 @@ class WorkerPool:
     def workers(self) -> list[dict]:
         """One line per worker for /api/health and /api/sessions."""
         with self._lock:
-            return [
+            out = [
                 {
                     "index": w.index,
                     "pid": w.process.pid,
@@ -449,6 +456,16 @@ class WorkerPool:
                 }
                 for w in self._workers
             ]
+            for line, w in zip(out, self._workers, strict=True):
+                info = getattr(w.process, "info", None)  # a Ray actor: its node and load
+                if info is not None:
+                    line.update(node=info.get("node"), load=info.get("load"))
+            return out
+
+    def nodes(self) -> list[dict] | None:
+        """The cluster's nodes with the workers and robots on each (a Ray engine), else None."""
+        nodes = getattr(self.engine, "nodes", None)
+        return nodes(self.workers()) if nodes is not None else None
 
     def stop(self) -> None:
         self._stopped = True
@@ -462,3 +479,6 @@ class WorkerPool:
             if w.process.is_alive():
                 w.process.kill()
                 w.process.join(1.0)
+        close = getattr(self.engine, "close", None)
+        if close is not None:
+            close()  # (a Ray engine: its actors, and a local Ray instance it started)

@@ -211,22 +211,27 @@ def worker_main(
     publish_hz: float,
     strategies: tuple[str, ...] = (),
     host: InProcess | None = None,
+    clock: Callable[[], float] = time.monotonic,
+    own_signals: bool = True,
 ) -> None:
     """Entry point of a worker: serve commands until told to stop or orphaned. ``commands``
     and ``frames``: the ends of two pipes (``recv``, ``send_bytes``), or of two queues.
     ``strategies``: the files of a user's strategies the web process loaded (``serve
     --strategy``), loaded here too so the robots' names mean the same classes. ``host``: run
     in a thread of the web process (its strategies loaded, its signals its own), whose queue
-    never blocks a loop: frames go straight to it, none dropped, with its clock."""
-    host_clock, virtual = time.monotonic, None
+    never blocks a loop: frames go straight to it, none dropped, with its clock. ``clock``:
+    the sessions' wall clock elsewhere (a Ray actor's: ``time.time``, shared by the hosts);
+    ``own_signals``: a process of its own, whose signals it sets (not a Ray actor's thread)."""
+    host_clock, virtual = clock, None
     lock = threading.Lock()  # in a thread of the web process: the loops' threads send in turn
     if host is None:
         logging.basicConfig(level=logging.WARNING)
         strategy.load_files(strategies)
         # The web process stops its workers (Ctrl-C reaches the whole process group): ignore
         # the signals; a worker also ends when the web process's pipe closes.
-        signal.signal(signal.SIGINT, signal.SIG_IGN)
-        signal.signal(signal.SIGTERM, signal.SIG_IGN)
+        if own_signals:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+            signal.signal(signal.SIGTERM, signal.SIG_IGN)
         outbox = Outbox(frames.send_bytes)
         threading.Thread(target=outbox.run, name="outbox", daemon=True).start()
         hosted: dict[str, _Hosted] = {}

@@ -7,7 +7,8 @@ Processes and threads (the machine may have only two cores):
   run the live sessions, each paced to real time, and send their frames back; with
   ``--workers 0`` the same pool runs its one worker in threads of this process instead (its
   in-process engine, ``app.live.engines``: one process to debug or profile; the robots then
-  share this process's interpreter with the display);
+  share this process's interpreter with the display); with ``--ray [ADDRESS]`` they are Ray
+  actors on a cluster instead (``app.live.ray_engine``), as many as the cluster holds;
 - the **display** thread (:class:`~app.web.view.Display`) draws each view's shown frame at
   most ``--display-hz`` times a second; viser's own thread sends the scene to the browsers;
 - **uvicorn** serves the page and the HTTP API in the main thread.
@@ -52,7 +53,7 @@ from app.live.session import initial_intent
 from app.web.addresses import ClientAddresses
 from app.web.api import create_app
 from app.web.auth import Instructor, redact_logs
-from app.web.settings import Settings, worker_layout
+from app.web.settings import MAX_DEFAULT_WORKERS, ROBOTS_PER_CORE, Settings, worker_layout
 from app.web.view import Display
 from controller import strategy
 from pelvic_walk.core.params import parse_assignment
@@ -99,6 +100,43 @@ def _fail(message: str) -> int:
     return 2
 
 
+def ray_layout(
+    address: str, workers: int | None, robots_per_worker: int | None
+) -> tuple[Any, int, int]:
+    """(the Ray engine, its workers, robots each) for ``serve --ray [ADDRESS]``: an actor
+    holds ``robots_per_worker`` robots (default ROBOTS_PER_CORE: a CPU's worth), as many
+    actors as the cluster's free CPUs hold (at most ``workers`` if given). ImportError or
+    ConnectionError (Ray missing or unreachable), ValueError (the cluster holds no actor),
+    one line each."""
+    from app.live.ray_engine import RayEngine
+
+    if workers == 0:
+        raise ValueError("--workers 0 runs the robots in this process; --ray needs at least 1")
+    per = robots_per_worker or ROBOTS_PER_CORE
+    engine = RayEngine(address or None, robots_per_worker=per)
+    held = engine.workers_for()
+    n = min(held, workers) if workers else min(held, 4 * MAX_DEFAULT_WORKERS)
+    if n < 1:
+        engine.close()
+        raise ValueError(
+            f"--ray: the cluster ({engine.where}) has no room for one worker of {per} robots"
+            f" ({engine.worker_cpu:g} CPU); give fewer --robots-per-worker or add nodes"
+        )
+    return engine, n, per
+
+
+def cluster_line(engine: Any, workers: int, robots_per_worker: int) -> str:
+    """The start-up line of ``serve --ray``: the cluster, its nodes and the seats."""
+    nodes = [n for n in engine.nodes([]) if n["alive"]]
+    cpus = sum(n["cpus"] for n in nodes)
+    share = engine.robot_cpu
+    return (
+        f"pelvic-walk: Ray: {len(nodes)} node{'s' if len(nodes) != 1 else ''}, {cpus:g} CPUs;"
+        f" {workers} worker(s) x {robots_per_worker} robot(s) = {workers * robots_per_worker}"
+        f" robot seats ({share:.3g} CPU a robot, {engine.worker_cpu:g} a worker)"
+    )
+
+
 def private_room_line(workers: int, robots_per_worker: int, robots: int, shared_demo: bool) -> str:
     """The start-up line of ``--sessions private``: how many private sessions of ``robots``
     robots the workers hold beside the shared demo (a session takes a slot per robot, the demo
@@ -142,6 +180,7 @@ def serve(
     trusted_proxies: list[str] | None = None,
     robots: list[Robot] | None = None,
     param_set: list[str] | None = None,
+    ray: str | None = None,
 ) -> int:
     """Run the web tool until Ctrl-C; returns the exit status (2 on a busy port).
 
@@ -152,7 +191,9 @@ def serve(
     line (else loaded here); each adds a robot to the default ``methods``. ``robots``
     (``--robot``): the robots every session starts with, strategies with their own settings
     (instead of ``methods``); ``param_set`` (``--set GROUP.NAME=VALUE``): the shared
-    parameters' values, a strategy's own (``gain.k=12``) included.
+    parameters' values, a strategy's own (``gain.k=12``) included. ``ray`` (``--ray
+    [ADDRESS]``): the robots on a Ray cluster ("" for a local instance; ``workers``: at most
+    that many actors, else as many as the cluster holds).
     """
     import uvicorn
 
@@ -207,24 +248,38 @@ def serve(
         )
     except ValueError as exc:
         return _fail(f"--robot: {exc}" if robots else str(exc))
+    engine: Any = None if workers else InProcessEngine()  # --workers 0: threads of this one
+    if ray is not None:
+        try:
+            engine, workers, robots_per_worker = ray_layout(
+                ray, settings.workers, settings.robots_per_worker
+            )
+        except (ImportError, ConnectionError, ValueError) as exc:
+            return _fail(str(exc))
     if settings.shared_demo and len(intent.methods) > max(workers, 1) * robots_per_worker:
+        if ray is not None:
+            engine.close()
         return _fail(
             f"{workers} worker(s) x {robots_per_worker} robot(s) cannot hold the"
             f" {len(intent.methods)} robots of the demo; give more --workers or"
             " --robots-per-worker"
         )
+    problem = None
     if not port_free(host, port):
-        return _fail(f"port {port} on {host} is in use; choose another with --port")
-    if not port_free(host, viser_port):
-        return _fail(f"port {viser_port} on {host} is in use; choose another with --viser-port")
-
-    viser_server = viser.ViserServer(host=host, port=viser_port, verbose=False)
-    if viser_server.get_port() != viser_port:
-        viser_server.stop()
-        return _fail(f"port {viser_port} on {host} is in use; choose another with --viser-port")
+        problem = f"port {port} on {host} is in use; choose another with --port"
+    elif not port_free(host, viser_port):
+        problem = f"port {viser_port} on {host} is in use; choose another with --viser-port"
+    if problem is None:
+        viser_server = viser.ViserServer(host=host, port=viser_port, verbose=False)
+        if viser_server.get_port() != viser_port:
+            viser_server.stop()
+            problem = f"port {viser_port} on {host} is in use; choose another with --viser-port"
+    if problem is not None:
+        if ray is not None:
+            engine.close()
+        return _fail(problem)
 
     # --workers 0: the same pool, its one worker in threads of this process
-    engine = None if workers else InProcessEngine()
     pool = WorkerPool(max(workers, 1), robots_per_worker, display_hz, engine).start()
     registry = SessionRegistry.start(
         sessions,
@@ -248,6 +303,7 @@ def serve(
         # the main thread (uvicorn, and the API's worker threads it starts) keeps its
         # priority: the HTTP API is light and must answer promptly
         keep = pool.receiver_thread_ids() | {threading.get_native_id()}
+        keep |= engine.keep_threads() if ray is not None else set()  # (Ray's: the frames')
         lower_priority(settings.display_nice, keep=keep)
     redact_logs()  # a URL with ?token= never reaches a log (the access log is off anyway)
     # proxy_headers off: forwarded headers are read by app.web.addresses alone, from the
@@ -263,13 +319,17 @@ def serve(
         f"pelvic-walk: open http://{shown}:{port}/  (3-D scene: http://{shown}:{viser_port}/,"
         f" API docs: http://{shown}:{port}/docs); "
         + (
-            f"{workers} worker process{'es' if workers != 1 else ''}"
+            f"{workers} Ray actor{'s' if workers != 1 else ''} on {engine.where}"
+            if ray is not None
+            else f"{workers} worker process{'es' if workers != 1 else ''}"
             if workers
             else "the robots in this process (--workers 0)"
         )
         + f", {sessions} sessions{demo}{teacher}; Ctrl-C to stop",
         flush=True,
     )
+    if ray is not None:
+        print(cluster_line(engine, workers, robots_per_worker), flush=True)
     if sessions == "private":
         print(
             private_room_line(

@@ -77,7 +77,8 @@ def create_app(
     @health.get("/health")
     def get_health(who: Caller = Who) -> dict[str, Any]:
         """``ok`` while every session's loop runs; workers and their deaths, if any (a
-        worker's robots name a private session only to its holder and the instructor)."""
+        worker's robots name a private session only to its holder and the instructor); with
+        ``serve --ray`` the cluster: its seats and nodes, their workers, robots and load."""
         shared = registry.shared if registry.has_shared else None
         frame = shared.frame() if shared is not None else None
         pool = registry.pool
@@ -99,6 +100,15 @@ def create_app(
             "workers": workers,
             "worker_deaths": deaths,
         }
+        nodes = pool.nodes() if pool is not None else None
+        if nodes is not None and pool is not None:  # serve --ray: the cluster behind
+            out["cluster"] = {
+                "where": getattr(pool.engine, "where", None),
+                "robot_cpu": getattr(pool.engine, "robot_cpu", None),
+                "robot_seats": pool.capacity,
+                "robots": pool.robots(),
+                "nodes": nodes,
+            }
         if health_extra is not None:
             out.update(health_extra())
         return finite(out)
