@@ -226,6 +226,7 @@ class _Worker:
     codec: FrameCodec = field(default_factory=FrameCodec)
     stopping: bool = False
     receiver: threading.Thread | None = None
+    shown: set[str] = field(default_factory=set)  # parts that have sent a frame (robots built)
 
     def send(self, message: tuple) -> None:
         with self.lock:
@@ -330,6 +331,7 @@ class WorkerPool:
                     # worker read the close (its plan went with it): stale, and no reason to
                     # stop reading this worker's frames
                     continue
+                w.shown.add(pid)
                 session.receive_part(method, frame)
             elif kind == "error":
                 session.error = payload.splitlines()[0]
@@ -360,6 +362,15 @@ class WorkerPool:
         with self._lock:
             for session, method in dead.parts.values():
                 self._open_part(new, session, method)
+        # the restart once the new worker has built its robots (its first frames): a fresh
+        # worker builds its first robots slowly (models loaded, kernels read), and a part
+        # built after the restart's start clock would join its session only in phase, later
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while time.monotonic() < deadline and not self._stopped:
+            with self._lock:
+                if all(pid in new.shown or pid not in new.parts for pid in dead.parts):
+                    break
+            time.sleep(0.02)
         for session in held.values():
             session.reset()
 
@@ -459,7 +470,7 @@ class WorkerPool:
             for line, w in zip(out, self._workers, strict=True):
                 info = getattr(w.process, "info", None)  # a Ray actor: its node and load
                 if info is not None:
-                    line.update(node=info.get("node"), load=info.get("load"))
+                    line.update(node=(info.get("node") or "")[:8] or None, load=info.get("load"))
             return out
 
     def nodes(self) -> list[dict] | None:

@@ -232,7 +232,9 @@ class RayEngine:
     """
 
     clock = staticmethod(time.time)
-    start_delay = START_DELAY_S
+    # rebuilt robots start this much later: an actor's parts build in its threads, on a node
+    # whose cores other actors share, and their intents cross the network first
+    start_delay = 2 * START_DELAY_S
 
     def __init__(
         self,
@@ -310,12 +312,12 @@ class RayEngine:
         robots on each, and the node's load (1-minute load average, as its actors report)."""
         out = []
         for n in self.ray.nodes():
-            nid = n.get("NodeID", "")
+            nid = n.get("NodeID", "")[:8]
             mine = [w for w in workers if w.get("node") == nid]
             loads = [w["load"] for w in mine if w.get("load") is not None]
             out.append(
                 {
-                    "node": nid[:8],
+                    "node": nid,
                     "address": n.get("NodeManagerAddress"),
                     "alive": bool(n.get("Alive")),
                     "cpus": n.get("Resources", {}).get("CPU", 0.0),
