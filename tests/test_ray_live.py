@@ -137,6 +137,7 @@ def test_serve_ray_runs_private_sessions_in_actors_and_restarts_a_killed_one():
         assert h["worker_deaths"] and f"pid {worker['pid']} on node" in h["worker_deaths"][-1]
         assert "1 session restarted" in h["worker_deaths"][-1]
         assert h["workers"][0]["pid"] != worker["pid"]
+
         def restarted(s: dict) -> bool:  # walked 0.5 s since a start after the kill
             starts = [s["clock"] - r["t"] for r in s["robots"]]
             return min(starts) > before["clock"] and all(r["t"] > 0.5 for r in s["robots"])

@@ -458,7 +458,7 @@ class WorkerPool:
     def workers(self) -> list[dict]:
         """One line per worker for /api/health and /api/sessions."""
         with self._lock:
-            out = [
+            out: list[dict[str, Any]] = [
                 {
                     "index": w.index,
                     "pid": w.process.pid,

@@ -86,7 +86,7 @@ def create_app(
         workers = registry.workers(reveal_to(registry, who))
         shared_ok = shared is None or (shared.running and shared.error is None)
         healthy = shared_ok and all(w["alive"] for w in workers)
-        out = {
+        out: dict[str, Any] = {
             "status": "ok" if healthy else "degraded",
             "live_running": shared.running if shared is not None else None,
             "live_error": shared.error if shared is not None else None,
