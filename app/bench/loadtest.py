@@ -195,6 +195,7 @@ async def _viewer(url: str, subprotocol: str, counter: list[int], stop: asyncio.
             except TimeoutError:
                 continue
             counter[0] += len(msg)
+            counter[1] += 1
 
 
 async def _run(
@@ -208,7 +209,7 @@ async def _run(
     import viser
 
     subprotocol = f"viser-v{viser.__version__}"
-    counters = [[0] for _ in range(viewers)]
+    counters = [[0, 0] for _ in range(viewers)]  # bytes, messages
     stop = asyncio.Event()
     tasks = [asyncio.create_task(_viewer(viser_url, subprotocol, c, stop)) for c in counters]
     rtf: list[float] = []
@@ -218,6 +219,7 @@ async def _run(
     async with httpx.AsyncClient(timeout=10) as client:
         await asyncio.sleep(WARMUP_S)
         t0, b0 = time.monotonic(), sum(c[0] for c in counters)
+        m0 = sum(c[1] for c in counters)
         last_t, last_b = t0, b0
         mem_warm, mem_peak = None, None
         cpu()  # the meter's first interval starts here
@@ -243,6 +245,7 @@ async def _run(
             last_t, last_b = now, b
         elapsed = time.monotonic() - t0
         total = sum(c[0] for c in counters) - b0
+        messages = sum(c[1] for c in counters) - m0
     stop.set()
     await asyncio.gather(*tasks, return_exceptions=True)
     return {
@@ -253,6 +256,7 @@ async def _run(
         "realtime_factor_samples": rtf,
         "bytes_per_viewer_per_s": total / elapsed / max(viewers, 1),
         "bytes_per_viewer_per_s_max": max(rates) if rates else None,
+        "messages_per_viewer_per_s": messages / elapsed / max(viewers, 1),
         "memory_mb_after_warmup": mem_warm,
         "memory_mb_peak": mem_peak,
         "cpu_samples": cpu_samples,
@@ -364,7 +368,8 @@ def format_report(r: dict[str, Any]) -> str:
         if med is not None
         else "real-time factor   no samples",
         f"sent per viewer    {r['bytes_per_viewer_per_s'] / 1e3:.1f} KB/s (max "
-        f"{(r['bytes_per_viewer_per_s_max'] or 0) / 1e3:.1f} KB/s over 1 s)",
+        f"{(r['bytes_per_viewer_per_s_max'] or 0) / 1e3:.1f} KB/s over 1 s; "
+        f"{r.get('messages_per_viewer_per_s', 0):.1f} scene messages/s)",
     ]
     health = r.get("health") or {}
     if health.get("sessions_mode") == "private":
