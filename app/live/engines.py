@@ -14,8 +14,11 @@ hands back its two ends, commands in and frames out. Both engines run the same w
   and no message is in flight, so frames relate exactly to simulated time however busy
   the machine is (the loops never fall behind, as on an idle machine).
 
-(A Ray engine would go behind the same three calls: ``start``, ``loop`` and the
-``clock`` and ``start_delay`` the sessions read.)
+- :class:`~app.live.ray_engine.RayEngine` (``serve --ray [ADDRESS]``): each worker a Ray
+  actor on a cluster, its pipes Ray calls (``app.live.ray_engine``; Ray imported only there).
+
+All three go behind the same calls: ``start``, ``loop`` and the ``clock`` and
+``start_delay`` the sessions read.
 """
 
 from __future__ import annotations

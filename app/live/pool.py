@@ -4,7 +4,8 @@ The web process keeps the viser broadcast, FastAPI and the display thread; the r
 ``n_workers`` workers (``app.live.worker``), by default processes, so they keep real time
 whatever the number of viewers, as long as their worker has the compute. How a worker is started
 and reached is the pool's *engine* (``app.live.engines``): processes over pipes (the product's),
-or threads of this process over queues (``serve --workers 0``, the tests); the placement, the
+threads of this process over queues (``serve --workers 0``, the tests), or Ray actors over Ray
+calls (``serve --ray``, ``app.live.ray_engine``); the placement, the
 parts, the merge and the restarts below are the same on both. Each robot of a session runs in a
 *part* (a :class:`~app.live.loop.LiveLoop` with that one robot) placed on the worker with the
 most free robot slots (``robots_per_worker`` each), so one session's robots use every core. The
@@ -14,7 +15,8 @@ stay in step; :class:`RemoteSession` merges their frames into one.
 :meth:`WorkerPool.open` raises :class:`PoolFull` when the robots would not fit (admission
 control). A receiver thread per worker reads the frames; when a worker dies (its pipe
 closes), the pool records it, starts a new process, re-opens the dead worker's parts there
-and restarts the robots of every session it held, all together.
+and, once they have built their robots, restarts the robots of every session it held, all
+together.
 """
 
 from __future__ import annotations
