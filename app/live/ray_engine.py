@@ -166,6 +166,7 @@ class ActorWorker:
         self._killed = False
         self.info: dict = {}  # pid, node, ip, load, cpus (the latest the actor told)
         self.died: str | None = None  # why, when the actor died
+        self.bytes_received = 0  # the messages' bytes so far (what crossed from the actor)
 
     # -- the handle ------------------------------------------------------------------------
     @property
@@ -220,6 +221,7 @@ class ActorWorker:
             if info is not None:
                 self.info = {**self.info, **info}
             self._pending.extend(items)
+            self.bytes_received += sum(len(x) for x in items)
         return self._pending.popleft()
 
 
