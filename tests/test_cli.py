@@ -169,3 +169,25 @@ def test_sweep_lists_take_commas_or_spaces():
     ]
     assert grids[0].methods == grids[1].methods == ("fixed", "mpc")
     assert grids[0].axes == grids[1].axes and len(grids[1].cells()) == 2
+
+
+def test_serve_ray_without_ray_or_with_no_workers_is_one_line(capsys, monkeypatch):
+    """``serve --ray``: Ray missing, or ``--workers 0`` (the robots in this process), exit 2
+    with one line before anything starts."""
+    monkeypatch.setitem(sys.modules, "ray", None)  # import ray -> ImportError
+    assert main(["serve", "--ray", "--port", "1", "--viser-port", "2"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "pip install 'pelvic-walk[cluster]'" in err, err
+    assert main(["serve", "--ray", "--workers", "0"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "--workers 0" in err and "--ray" in err, err
+
+
+def test_serve_ray_at_an_address_nobody_answers_is_one_line(capsys):
+    pytest.importorskip("ray", exc_type=ImportError)
+    from app.bench.local_server import free_port
+
+    port = free_port()  # (free: nothing listens there)
+    assert main(["serve", "--ray", f"127.0.0.1:{port}"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.count("\n") == 0 and "cannot reach Ray" in err, err

@@ -32,9 +32,11 @@ it when it is missing.
 from __future__ import annotations
 
 import collections
+import math
 import os
 import pickle
 import queue
+import socket
 import threading
 import time
 from typing import Any
@@ -47,6 +49,7 @@ from pelvic_walk.core.engine import import_ray
 ROBOT_CPU = 1 / 6  # a robot's share of a CPU (ROBOTS_PER_CORE robots a core, app.web.settings)
 FRAMES_WAIT_S = 0.5  # [s] a frames() call returns empty after this (the receiver asks again)
 LOAD_EVERY_S = 2.0  # [s] how often an actor reports its node's load
+NODES_EVERY_S = 2.0  # [s] the cluster's nodes are asked for at most this often (health)
 
 
 def _node_id() -> str:
@@ -261,6 +264,7 @@ class RayEngine:
             if address:
                 kwargs["address"] = address
                 self.where = f"Ray cluster at {address}"
+                _reachable(address, self.where)  # (Ray itself waits minutes for a wrong one)
             else:
                 cpus = cpus or os.cpu_count() or 1
                 kwargs["num_cpus"] = cpus
@@ -278,6 +282,8 @@ class RayEngine:
         self._ray_threads = _thread_ids() - before  # Ray's own threads in this process
         self._actor_class = ray.remote(LiveWorker)
         self._workers: list[ActorWorker] = []
+        self._nodes: list[dict] = []
+        self._nodes_at = -math.inf
 
     @property
     def worker_cpu(self) -> float:
@@ -312,8 +318,11 @@ class RayEngine:
     def nodes(self, workers: list[dict]) -> list[dict]:
         """The cluster's nodes for /api/health: address, alive, CPUs, the pool's workers and
         robots on each, and the node's load (1-minute load average, as its actors report)."""
+        now = time.monotonic()
+        if now - self._nodes_at > NODES_EVERY_S:  # (a call to Ray's control plane)
+            self._nodes, self._nodes_at = self.ray.nodes(), now
         out = []
-        for n in self.ray.nodes():
+        for n in self._nodes:
             nid = n.get("NodeID", "")[:8]
             mine = [w for w in workers if w.get("node") == nid]
             loads = [w["load"] for w in mine if w.get("load") is not None]
@@ -342,3 +351,18 @@ def _thread_ids() -> set[int]:
         return {int(t) for t in os.listdir("/proc/self/task")}
     except OSError:
         return set()
+
+
+def _reachable(address: str, where: str, timeout: float = 5.0) -> None:
+    """ConnectionError (one line) unless ``HOST:PORT`` accepts a TCP connection; other forms
+    (``auto``, ``ray://...``) are left to Ray."""
+    host, sep, port = address.rpartition(":")
+    if not sep or "://" in address or not port.isdigit():
+        return
+    try:
+        socket.create_connection((host.strip("[]"), int(port)), timeout=timeout).close()
+    except OSError as exc:
+        raise ConnectionError(
+            f"--ray: cannot reach Ray ({where}): {exc.strerror or exc}; is `ray start --head` "
+            "running there?"
+        ) from None
