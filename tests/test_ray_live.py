@@ -192,6 +192,12 @@ def test_a_node_lost_is_a_session_that_goes_on():
         assert len(nodes) == 2 and all(n["robots"] == 1 for n in nodes.values()), nodes
         while f.clock < 2.0:
             f = s.wait_frame(f.seq, timeout=30)
+        # in step across the nodes: one time base (as tests/test_pool.py reads it: a part that
+        # built its robot after the start clock joins a whole step cycle later)
+        starts = [r.clock - r.t for r in f.robots]
+        cycle = 2 * PARAMS.walk.step_time
+        apart = [(x - starts[0]) % cycle for x in starts]
+        assert all(min(a, cycle - a) < 0.011 for a in apart), starts
         lost = next(w for w in pool.workers() if w["node"] == second.node_id[:8])
         clock_before = f.clock
         cluster.remove_node(second)
