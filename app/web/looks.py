@@ -72,16 +72,18 @@ def shade(color: tuple[int, int, int], n: int) -> tuple[int, int, int]:
     for a light one, further with each robot."""
     lum = (0.2126 * color[0] + 0.7152 * color[1] + 0.0722 * color[2]) / 255
     target = 255 if lum < 0.45 else 0
-    f = min(0.3 + 0.2 * (n - 1), 0.8) if target else min(0.35 + 0.15 * (n - 1), 0.7)
+    f = min(0.4 + 0.3 * (n - 1), 0.85) if target else min(0.35 + 0.25 * (n - 1), 0.75)
     return tuple(round(c + (target - c) * f) for c in color)  # type: ignore[return-value]
 
 
 def looks(robots: Iterable[Any]) -> dict[str, RobotLook]:
     """Key -> :class:`RobotLook` of the robots shown, in their order: frames' robots
-    (``.method``, ``.strategy``, ``.params``) or ``(key, strategy)`` pairs."""
+    (``.method``, ``.strategy``, ``.params``), ``(key, strategy)`` pairs or strategies' names."""
     items = []
     for r in robots:
-        if isinstance(r, tuple):
+        if isinstance(r, str):  # a strategy's name: its robot named after it
+            items.append((r, r, None))
+        elif isinstance(r, tuple):
             items.append((r[0], r[1], None))
         else:
             items.append((r.method, r.strategy, r.params))

@@ -198,7 +198,7 @@ class LivePlots:
         self._scales = {}
         self._last = None
 
-    def _make(self, methods: tuple[tuple[str, str], ...]) -> dict[str, Any]:
+    def _make(self, methods: tuple[tuple[str, str] | str, ...]) -> dict[str, Any]:
         handles: dict[str, Any] = {}
         # each robot's line in its colour and its own dash pattern, its legend entry with its
         # marker and label: told apart without colour too (app.web.looks)
@@ -210,7 +210,7 @@ class LivePlots:
                 width=2,
                 **({"dash": look[m].dash} if look[m].dash else {}),
             )
-            for m, _s in methods
+            for m in (x if isinstance(x, str) else x[0] for x in methods)
         )
         x_axis = viser.uplot.Series(label="t - now [s]")
 
