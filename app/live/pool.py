@@ -377,7 +377,9 @@ class WorkerPool:
         """PoolFull unless the workers have room for the robots ``session`` would add."""
         with self._lock:
             need = len([m for m in methods if m not in session.parts])
-            room = sum(self.robots_per_worker - w.robots for w in self._workers)
+            # the session's robots not kept are closed before the new ones open (sync_parts)
+            freed = len([m for m in session.parts if m not in methods])
+            room = sum(self.robots_per_worker - w.robots for w in self._workers) + freed
             if need > room:
                 raise PoolFull(
                     f"the workers hold {self.n_workers} x {self.robots_per_worker}"

@@ -421,7 +421,7 @@ class LearnTab:
             return f"{r.params.pelvis.k_pel:g}, {r.params.com.horizon:g} s"
         if key == "differ":
             look = self._look.get(r.method)
-            return html.escape(look.settings) if look and look.settings else "as the others"
+            return html.escape(look.differs) if look and look.differs else "as the others"
         if key == "phase":
             return self._phase(r)
         if key == "plan":

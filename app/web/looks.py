@@ -54,7 +54,10 @@ class RobotLook:
     color: tuple[int, int, int]
     marker: str
     dash: tuple[float, ...]
-    settings: str = ""  # the settings that differ from the other robots' ("H=0.8 s")
+    # the settings that differ from the other robots' ("H=0.8 s"), but for those the label
+    # says already (its tag: "k_pel 0.45", not "k_pel 0.45 · k_pel=0.45")
+    settings: str = ""
+    differs: str = ""  # all the settings that differ (tables)
 
     @property
     def tag(self) -> str:
@@ -93,7 +96,10 @@ def looks(robots: Iterable[Any]) -> dict[str, RobotLook]:
 @functools.lru_cache(maxsize=64)
 def _looks(items: tuple[tuple[str, str, ControllerParams | None], ...]) -> dict[str, RobotLook]:
     params = [p for _k, _s, p in items if p is not None]
-    texts = differing_texts(params) if len(params) == len(items) else {}
+    keys = [k for k, _s, _p in items]
+    complete = len(params) == len(items)
+    texts = differing_texts(params, keys) if complete else {}
+    every = differing_texts(params) if complete else {}
     out: dict[str, RobotLook] = {}
     seen: dict[str, int] = {}
     for i, (key, name, _p) in enumerate(items):
@@ -112,25 +118,34 @@ def _looks(items: tuple[tuple[str, str, ControllerParams | None], ...]) -> dict[
                 str(n + 1).translate(SUPERSCRIPT) if n > 1 else ""
             )
             dash = OTHER_DASHES[(n - 1) % len(OTHER_DASHES)]
-        out[key] = RobotLook(key, name, title, color, marker, dash, texts.get(i, ""))
+        out[key] = RobotLook(
+            key, name, title, color, marker, dash, texts.get(i, ""), every.get(i, "")
+        )
     return out
 
 
 def value_text(dotted: str, value: Any) -> str:
     """``H=0.8 s``: a parameter's short name, its value and unit."""
-    name = SHORT.get(dotted, dotted.partition(".")[2])
+    name, shown = _parts(dotted, value)
     unit = ""
     try:
         unit = meta_of(dotted)[2].get("unit") or ""
     except ValueError:
         pass
-    if isinstance(value, bool):
-        shown = "on" if value else "off"
-    elif isinstance(value, float):
-        shown = f"{value:g}"
-    else:
-        shown = str(value)
     return f"{name}={shown}" + (f" {unit}" if unit else "")
+
+
+def _parts(dotted: str, value: Any) -> tuple[str, str]:
+    name = SHORT.get(dotted, dotted.partition(".")[2])
+    if isinstance(value, bool):
+        return name, "on" if value else "off"
+    return name, f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def said_by(label: str, dotted: str, value: Any) -> bool:
+    """Whether a robot's label already says this setting ("k_pel 0.45" says k_pel=0.45)."""
+    name, shown = _parts(dotted, value)
+    return name in label and shown in label
 
 
 def differing(params: Sequence[ControllerParams]) -> list[list[tuple[str, Any]]]:
@@ -147,10 +162,15 @@ def differing(params: Sequence[ControllerParams]) -> list[list[tuple[str, Any]]]
     return out
 
 
-def differing_texts(params: Sequence[ControllerParams]) -> dict[int, str]:
-    """Per robot's index: its differing settings as text ("H=0.8 s, k_pel=0.45")."""
-    return {
-        i: ", ".join(value_text(d, v) for d, v in items)
-        for i, items in enumerate(differing(params))
-        if items
-    }
+def differing_texts(
+    params: Sequence[ControllerParams], labels: Sequence[str] | None = None
+) -> dict[int, str]:
+    """Per robot's index: its differing settings as text ("H=0.8 s, k_pel=0.45"), but for
+    those its label already says (``labels``)."""
+    out = {}
+    for i, items in enumerate(differing(params)):
+        label = labels[i] if labels is not None else ""
+        text = ", ".join(value_text(d, v) for d, v in items if not said_by(label, d, v))
+        if text:
+            out[i] = text
+    return out

@@ -1,6 +1,15 @@
 """The viser control panel of one view: playback and timeline, views, comparison, presets,
 parameters, push, layers; and the Inspect, Plots and Learn tabs.
 
+The Compare folder shows the session's robots (a strategy, its own settings, a label: two may
+run one strategy) and adds, removes and relabels them; a refusal (a bad setting, a label taken,
+more than six robots, no room in the workers) is said there in one line and the session keeps
+its robots. "Sliders act on" chooses what the parameter sliders show and set: the value every
+robot shares (``update_params``), or one robot's own settings (``update_params(target=KEY)``).
+A strategy's own parameters (its ``Params``) get a folder of sliders each, shown while a robot
+of that strategy is; the paper's parameters a built-in strategy owns stay in the paper's
+folders.
+
 Every control only writes intent into the view's session (never the simulation). The
 parameter folders are generated from :func:`controller.params.spec` (a new gain in
 controller/params.py appears here): weights spanning decades get a log-scale slider with the
@@ -126,10 +135,10 @@ def robots_html(shown: tuple[Robot, ...]) -> str:
         lk = look[r.key]
         what = METHOD_INFO[r.strategy].title if r.strategy in METHOD_INFO else r.strategy
         own = ", ".join(value_text(k, v) for k, v in r.overrides)
+        about = ", ".join(x for x in (what if what != lk.title else "", own) if x)
         lines.append(
             f"<span aria-hidden='true' style='color:rgb{lk.color}'>{lk.marker}</span> "
-            f"<b>{html.escape(lk.title)}</b>: {html.escape(what)}"
-            + (f", {html.escape(own)}" if own else "")
+            f"<b>{html.escape(lk.title)}</b>" + (f": {html.escape(about)}" if about else "")
         )
     return (
         "<div class='robots-shown' style='font-size:12.5px;line-height:1.6'>Robots shown:<br>"
@@ -330,6 +339,7 @@ class ControlPanel:
         """The robots shown, and adding, removing and relabelling one (Compare folder)."""
         gui = self.gui
         self.robot_list = gui.add_html(robots_html(intent.robots))
+        gui.add_markdown("**Add a robot** (two may run one strategy with different settings):")
         self.add_strategy = self.writer(
             gui.add_dropdown(
                 "Strategy", strategy.names(), initial_value=strategy.MPC, hint="The new robot's"
@@ -348,6 +358,7 @@ class ControlPanel:
         )
         add = self.writer(gui.add_button("Add robot", icon=viser.Icon.PLUS))
         add.on_click(lambda _e: self._add_robot())
+        gui.add_markdown("**Relabel or remove a robot:**")
         self.edit_robot = self.writer(
             gui.add_dropdown("Robot", intent.methods, hint="The robot to relabel or remove")
         )
