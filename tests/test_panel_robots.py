@@ -84,8 +84,11 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     assert intent.params_of("mpc").com.horizon == intent.params.com.horizon == 1.6
     _draw(view)
     assert "short horizon" in panel.robot_list.content and "H=0.8 s" in panel.robot_list.content
-    assert tuple(panel.target.options) == ("all robots", "fixed", "mpc", "short horizon")
-    assert tuple(panel.edit_robot.options) == ("fixed", "mpc", "short horizon")
+    # the dropdowns name the robots as the scene and legends do
+    names = ("fixed pelvis", "pelvic MPC", "short horizon")
+    assert tuple(panel.target.options) == ("all robots", *names)
+    assert tuple(panel.edit_robot.options) == names
+    assert tuple(panel.push_robot.options) == names
 
     # refusals: one line in the Compare folder, the robots unchanged
     for text, label, said in (
@@ -122,6 +125,7 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     assert panel.target.value == "H 0.8"
     panel.edit_robot.value, panel.new_label.value = "H 0.8", "mpc"
     panel._relabel_robot()
+    assert panel.compare_note.content.startswith("**Not applied:**")
     assert "share the label" in panel.compare_note.content
     assert sim.intent.methods == ("fixed", "mpc", "H 0.8")
 
@@ -264,6 +268,33 @@ def test_lesson_4_shows_two_mpcs_and_the_settings_that_differ(panel_view):
     assert "pelvic MPC" in table and "k_pel 0.45" in table
     assert "k_pel=0.25" in table and "k_pel=0.45" in table
     assert isinstance(panel.learn.run, LessonRun)
+
+
+def test_lesson_9_compares_beta_pel(panel_view):
+    from app.web.lessons import LESSONS
+
+    sim, view = panel_view
+    panel = view.panel
+    i = next(i for i, x in enumerate(LESSONS) if "beta_pel" in x.title)
+    panel.learn.start(i)
+    intent = sim.intent
+    assert [r.strategy for r in intent.robots] == ["mpc", "mpc"]
+    assert intent.params_of("beta_pel 1e-2").pelvis.beta == 0.01
+    assert intent.params_of("mpc").pelvis.beta == 1e-6
+    try:
+        deadline = time.monotonic() + 120
+        while "β_pel=0.01" not in panel.learn.live.content:
+            assert time.monotonic() < deadline, panel.learn.live.content
+            sim.wait_frame(timeout=30)
+            _draw(view)
+    finally:
+        sim.wait_applied(sim.pause(), 60)
+    table = panel.learn.live.content
+    assert "β_pel=1e-06" in table and "beta_pel 1e-2" in table
+    # the scene's tags: the label says the setting already, the plain MPC's says its value
+    tags = [str(x.handle.text).split("\n")[0] for x in view.scene.labels]
+    assert tags[0].startswith("● pelvic MPC · β_pel=1e-06"), tags
+    assert tags[1].startswith("○ beta_pel 1e-2 · β_pel=0.01"), tags
 
 
 def _robots(*forms: str):

@@ -127,6 +127,18 @@ def target_note(target: str) -> str:
     )
 
 
+def robot_names(shown: tuple[Robot, ...]) -> tuple[str, ...]:
+    """The robots as the dropdowns name them: by their titles as the scene and legends show
+    them ("pelvic MPC", "short horizon"), or by their keys if two titles were alike."""
+    look = looks((r.key, r.strategy) for r in shown)
+    titles = tuple(look[r.key].title for r in shown)
+    return (
+        titles
+        if len(set(titles)) == len(titles) and ALL_ROBOTS not in titles
+        else tuple(r.key for r in shown)
+    )
+
+
 def robots_html(shown: tuple[Robot, ...]) -> str:
     """The robots shown, one a line: marker in its colour, label, strategy, own settings."""
     look = looks((r.key, r.strategy) for r in shown)
@@ -276,7 +288,7 @@ class ControlPanel:
         self.target = self.writer(
             gui.add_dropdown(
                 "Sliders act on",
-                (ALL_ROBOTS, *intent.methods),
+                (ALL_ROBOTS, *robot_names(intent.robots)),
                 initial_value=ALL_ROBOTS,
                 hint="All robots (a shared value: a robot's own setting of it is dropped), or "
                 "one robot's own settings (the others keep theirs)",
@@ -315,7 +327,7 @@ class ControlPanel:
                 f"it fell for {FALL_HOLD_S:g} s, ringed in {COLOUR_NAMES[DANGER]}, then every "
                 "robot restarts)."
             )
-            self.push_robot = self.writer(gui.add_dropdown("Robot", intent.methods))
+            self.push_robot = self.writer(gui.add_dropdown("Robot", robot_names(intent.robots)))
             self.push_force = self.writer(
                 gui.add_slider("Force [N]", 10.0, PUSH_FORCE_MAX, 10.0, 60.0)
             )
@@ -360,7 +372,9 @@ class ControlPanel:
         add.on_click(lambda _e: self._add_robot())
         gui.add_markdown("**Relabel or remove a robot:**")
         self.edit_robot = self.writer(
-            gui.add_dropdown("Robot", intent.methods, hint="The robot to relabel or remove")
+            gui.add_dropdown(
+                "Robot", robot_names(intent.robots), hint="The robot to relabel or remove"
+            )
         )
         self.new_label = self.writer(gui.add_text("New label", ""))
         relabel = self.writer(gui.add_button("Relabel"))
@@ -438,8 +452,12 @@ class ControlPanel:
 
     def target_key(self) -> str | None:
         """The robot the sliders act on (its key), or None: every robot."""
-        value = self.target.value
-        return None if value == ALL_ROBOTS or value not in self.session.intent.methods else value
+        return self.key_of(self.target.value)
+
+    def key_of(self, name: str) -> str | None:
+        """The key of the robot a dropdown names ``name`` (None: no such robot shown)."""
+        shown = self.session.intent.robots
+        return dict(zip(robot_names(shown), (r.key for r in shown), strict=True)).get(name)
 
     def shown_params(self) -> ControllerParams:
         """The parameters the sliders show: the shared ones, or the targeted robot's."""
@@ -509,15 +527,16 @@ class ControlPanel:
     def _remove_robot(self) -> None:
         if self.guarded():
             return
-        key = self.edit_robot.value
+        key = self.key_of(self.edit_robot.value)
         self._set_robots([r for r in self.session.intent.robots if r.key != key])
 
     def _relabel_robot(self) -> None:
         if self.guarded():
             return
-        key, label = self.edit_robot.value, self.new_label.value.strip()
+        key, label = self.key_of(self.edit_robot.value), self.new_label.value.strip()
+        aimed = key is not None and self.target_key() == key
         try:
-            robot = self.session.intent.robot(key)
+            robot = self.session.intent.robot(str(key))
             if not label:
                 raise ValueError("type the new label first")
             new = robots_.make(robot.strategy, robot.overrides, label)
@@ -527,9 +546,10 @@ class ControlPanel:
         shown = [new if r.key == key else r for r in self.session.intent.robots]
         if self._set_robots(shown):
             self.new_label.value = ""
-            if self.target.value == key:  # the sliders keep acting on the same robot
-                self.target.options = (ALL_ROBOTS, *(r.key for r in shown))
-                self.target.value = new.key
+            if aimed:  # the sliders keep acting on the same robot
+                names = robot_names(tuple(shown))
+                self.target.options = (ALL_ROBOTS, *names)
+                self.target.value = names[shown.index(new)]
 
     def _speed_changed(self) -> None:
         if self.guarded() or self.speed.value == self.session.intent.speed:
@@ -570,8 +590,9 @@ class ControlPanel:
             return
         dx, dy = PUSH_DIRECTIONS[self.push_dir.value]
         f = float(self.push_force.value)
+        key = self.key_of(self.push_robot.value) or str(self.push_robot.value)
         try:
-            self.session.push(self.push_robot.value, (f * dx, f * dy), float(self.push_time.value))
+            self.session.push(key, (f * dx, f * dy), float(self.push_time.value))
         except ValueError as exc:
             self._say(f"**Not pushed:** {html.escape(str(exc))}")
             return
@@ -616,7 +637,7 @@ class ControlPanel:
                     self._put(
                         ("method", method), box, any(r.strategy == method for r in intent.robots)
                     )
-                self.push_robot.options = intent.methods
+                self.push_robot.options = robot_names(intent.robots)
                 self._put("speed", self.speed, intent.speed)
                 self.pause_button.label = "Resume" if intent.paused else "Pause"
                 self.pause_button.icon = (
@@ -652,7 +673,7 @@ class ControlPanel:
         """The robots shown: their list, the dropdowns naming them, the own-parameter
         folders of their strategies; the sliders' target falls back to every robot when its
         robot is gone."""
-        keys = intent.methods
+        keys = robot_names(intent.robots)
         options = (ALL_ROBOTS, *keys)
         if tuple(self.target.options) != options:
             value = self.target.value
