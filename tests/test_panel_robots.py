@@ -301,3 +301,13 @@ def _robots(*forms: str):
     from pelvic_walk.core import robots
 
     return [robots.parse(f) for f in forms]
+
+
+def test_a_robots_own_setting_known_to_break_walking_is_said_with_its_name():
+    from app.live.session import initial_intent
+    from app.web.panel import robot_warnings
+
+    intent = initial_intent(robots=_robots("mpc", "mpc,com.horizon=0.8@short horizon"))
+    said = robot_warnings(intent)
+    assert len(said) == 1 and said[0].startswith("short horizon: The MPC horizon (0.8 s)"), said
+    assert robot_warnings(initial_intent(robots=_robots("mpc", "fixed"))) == []

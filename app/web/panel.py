@@ -746,15 +746,26 @@ class ControlPanel:
             lines.append(
                 f"**{look[r.method].title}**: {r.status}, {kappa}{state}, falls {r.falls}{slow}"
             )
-        lines += [
-            f"⚠ {w}" for w in warnings_for(intent.params, tuple(r.strategy for r in intent.robots))
-        ]
+        lines += [f"⚠ {w}" for w in robot_warnings(intent)]
         extra = self.view.alerts()
         if self._message and time.monotonic() - self._message_at < MESSAGE_S:
             extra.append(self._message)
         text = "  \n".join(extra + lines)
         if self.status.content != text:
             self.status.content = text
+
+
+def robot_warnings(intent: Any) -> list[str]:
+    """Settings known to break walking (:func:`warnings_for`): those of the shared values for
+    the robots shown, then a robot's own (its settings of its own), named by its title."""
+    shared = warnings_for(intent.params, tuple(r.strategy for r in intent.robots))
+    out = list(shared)
+    titles = robot_names(intent.robots)
+    for r, title in zip(intent.robots, titles, strict=True):
+        if r.overrides:
+            mine = warnings_for(intent.params_of(r.key), (r.strategy,))
+            out += [f"{title}: {w}" for w in mine if w not in shared]
+    return out
 
 
 def kappa_text(kappa: float) -> str:
