@@ -5,7 +5,7 @@ moved in the page then changes that robot's parameters only (read back through
 
 Screenshots go to ``tests/artifacts/`` (robots_lesson4.png: the scene's labels;
 robots_sliders.png: the panel with the sliders' target; robots_compare.png: the Compare
-folder), for people to look at.
+folder; robots_inspect.png: the Inspect tab), for people to look at.
 """
 
 from __future__ import annotations
@@ -130,5 +130,12 @@ def test_lesson_4_two_mpcs_and_a_slider_aimed_at_one(tmp_path):
         screenshot(page, "robots_sliders.png")
         scroll_into_view(scene.get_by_role("button", name="Add robot"))
         screenshot(page, "robots_compare.png")
+        # the Inspect tab: its robot chosen by label, its caption with the settings that differ
+        open_tab(scene, "Inspect")
+        assert tuple(panel.inspector.robot.options) == ("pelvic MPC", "k_pel 0.45")
+        panel.inspector.robot.value = "k_pel 0.45"
+        caption = scene.get_by_text("○ k_pel 0.45 · step=0.3 m", exact=False)
+        wait_until(lambda: caption.count() >= 1, "the inspector's caption of the second robot")
+        screenshot(page, "robots_inspect.png")
         page.context.close()
     assert tool.errors == [], tool.errors[:3]

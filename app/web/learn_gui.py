@@ -2,8 +2,8 @@
 explanations and the kinematic analysis (Fig. 1-2, eq. 1-5). The text lives in
 :mod:`app.web.lessons`; this module builds the controls and reads the numbers from the frames.
 
-A lesson button writes intent only (parameters from their defaults, methods, a restart, as a
-preset does) and moves the clicking browser's camera. Which lesson runs is the *session's*
+A lesson button writes intent only (parameters from their defaults, its robots, a restart,
+as a preset does) and moves the clicking browser's camera. Which lesson runs is the *session's*
 state (:class:`LessonRun`, one per session, kept beside it on the web side): every view of
 the session shows its head, text, equations and live numbers, so the students watching an
 instructor's demo read the lesson the instructor started (their buttons are off). The live
