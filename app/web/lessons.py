@@ -225,8 +225,8 @@ LESSONS: tuple[Lesson, ...] = (
         f"{_K['kappa'][1]:.0f} at most). Read the waist, reach and kappa rows. Then choose "
         "<b>Sliders act on: k_pel 0.45</b> (Controls tab, above the parameter folders) and "
         "shorten its <b>Horizon H</b> (folder <i>CoM MPC</i>; both MPCs use it) to one "
-        "step (1.2 s) or less: that robot no longer sees the next foothold in time and falls within "
-        f"its first steps (measured: H = {_K['falls'][0][0]:g} s falls at "
+        "step (1.2 s) or less: that robot no longer sees the next foothold in time and falls "
+        f"within its first steps (measured: H = {_K['falls'][0][0]:g} s falls at "
         f"{_K['falls'][0][1]:.1f} s, {_K['falls'][1][0]:g} s at {_K['falls'][1][1]:.1f} s), "
         f"while the other keeps its 1.6 s; {FALL_HOLD_S:g} s after a fall both restart "
         "together. <i>Sliders act on: all robots</i> gives both the same value again.",
