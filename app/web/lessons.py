@@ -354,11 +354,15 @@ def own_strategies_sentence() -> str:
 # Short lessons, one per layer, with the paper's equation numbers.
 EXPLAIN: dict[str, str] = {
     "Overview": (
-        "Each robot runs the same controller with the same parameters; only the **waist yaw** "
+        "Each robot runs the same controller, by default with the same parameters; only the "
+        "**waist yaw** "
         "(the pelvic rotation) differs: **fixed** keeps it at 0, **redundancy** (ref. [21]) "
         "lets the IK use it with no preview, the **pelvic-rotation MPC** plans it over the "
         "horizon. Raise the step length and watch the **reach gauges**: the fixed pelvis "
-        f"straightens its swing leg ({_DANGER}) first."
+        f"straightens its swing leg ({_DANGER}) first. A robot may also have settings of its "
+        "own (the Compare folder adds one: an MPC with a shorter horizon beside the MPC); its "
+        "label says how it differs, and *Sliders act on* chooses whether a slider moves one robot "
+        "or all."
     ),
     "CoM MPC (eq. 10-18)": (
         "A linear inverted pendulum at constant height, state [p, v, a] per axis, input = jerk "
