@@ -18,6 +18,7 @@ from browser_util import (
     click_slider,
     get,
     needs_chromium,
+    open_folder,
     open_scene,
     open_tab,
     press,
@@ -128,6 +129,8 @@ def test_lesson_4_two_mpcs_and_a_slider_aimed_at_one(tmp_path):
         assert steps["mpc"] == pytest.approx(0.40)
         assert steps["k_pel 0.45"] == pytest.approx(mine.walk.step_length)
         screenshot(page, "robots_sliders.png")
+        scroll_into_view(scene.get_by_text("Add, relabel or remove a robot", exact=True))
+        open_folder(scene, "Add, relabel or remove a robot", "Relabel or remove a robot:")
         scroll_into_view(scene.get_by_role("button", name="Add robot"))
         screenshot(page, "robots_compare.png")
         # the Inspect tab: its robot chosen by label, its caption with the settings that differ

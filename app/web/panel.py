@@ -348,40 +348,43 @@ class ControlPanel:
         self.record = RecordFolder(gui, self)
 
     def _build_robots(self, intent: Any) -> None:
-        """The robots shown, and adding, removing and relabelling one (Compare folder)."""
+        """The robots shown, a refusal's line, and adding, removing and relabelling one (a
+        folder of its own in the Compare folder, closed at first: the parameters stay near
+        the top)."""
         gui = self.gui
         self.robot_list = gui.add_html(robots_html(intent.robots))
-        gui.add_markdown("**Add a robot** (two may run one strategy with different settings):")
-        self.add_strategy = self.writer(
-            gui.add_dropdown(
-                "Strategy", strategy.names(), initial_value=strategy.MPC, hint="The new robot's"
-            )
-        )
-        self.add_settings = self.writer(
-            gui.add_text(
-                "Settings",
-                "",
-                hint="Its own settings, e.g. com.horizon=0.8, pelvis.k_pel=0.45 (GROUP.NAME=VALUE"
-                ", comma-separated; empty: the shared ones)",
-            )
-        )
-        self.add_label = self.writer(
-            gui.add_text("Label", "", hint="Its name on the scene, plots and tables (optional)")
-        )
-        add = self.writer(gui.add_button("Add robot", icon=viser.Icon.PLUS))
-        add.on_click(lambda _e: self._add_robot())
-        gui.add_markdown("**Relabel or remove a robot:**")
-        self.edit_robot = self.writer(
-            gui.add_dropdown(
-                "Robot", robot_names(intent.robots), hint="The robot to relabel or remove"
-            )
-        )
-        self.new_label = self.writer(gui.add_text("New label", ""))
-        relabel = self.writer(gui.add_button("Relabel"))
-        relabel.on_click(lambda _e: self._relabel_robot())
-        remove = self.writer(gui.add_button("Remove robot", icon=viser.Icon.TRASH))
-        remove.on_click(lambda _e: self._remove_robot())
         self.compare_note = gui.add_markdown("")
+        with gui.add_folder("Add, relabel or remove a robot", expand_by_default=False):
+            gui.add_markdown("**Add a robot** (two may run one strategy with different settings):")
+            self.add_strategy = self.writer(
+                gui.add_dropdown(
+                    "Strategy", strategy.names(), initial_value=strategy.MPC, hint="What it runs"
+                )
+            )
+            self.add_settings = self.writer(
+                gui.add_text(
+                    "Settings",
+                    "",
+                    hint="Its own settings, e.g. com.horizon=0.8, pelvis.k_pel=0.45 "
+                    "(GROUP.NAME=VALUE, comma-separated; empty: the shared ones)",
+                )
+            )
+            self.add_label = self.writer(
+                gui.add_text("Label", "", hint="Its name on the scene, plots and tables (optional)")
+            )
+            add = self.writer(gui.add_button("Add robot", icon=viser.Icon.PLUS))
+            add.on_click(lambda _e: self._add_robot())
+            gui.add_markdown("**Relabel or remove a robot:**")
+            self.edit_robot = self.writer(
+                gui.add_dropdown(
+                    "Robot", robot_names(intent.robots), hint="The robot to relabel or remove"
+                )
+            )
+            self.new_label = self.writer(gui.add_text("New label", ""))
+            relabel = self.writer(gui.add_button("Relabel"))
+            relabel.on_click(lambda _e: self._relabel_robot())
+            remove = self.writer(gui.add_button("Remove robot", icon=viser.Icon.TRASH))
+            remove.on_click(lambda _e: self._remove_robot())
 
     def _add_param(self, group: str, name: str, meta: dict[str, Any], value: Any) -> None:
         gui = self.gui
