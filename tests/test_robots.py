@@ -97,3 +97,12 @@ def test_what_differs_is_what_not_every_robot_shares():
         "c": {"com.horizon": 0.8},
     }
     assert R.differing([b, c]) == {"b": {}, "c": {}}
+
+
+def test_a_whole_number_for_a_real_parameter_is_kept_as_a_real():
+    """The API's JSON gives 25 for 25.0: a robot's settings read the same however typed."""
+    r = R.make("mpc", {"com.horizon": 1}, "x")
+    assert r.overrides == (("com.horizon", 1.0),) and isinstance(r.overrides[0][1], float)
+    moved = R.with_settings(r, {"pelvis.k_pel": 0}, ControllerParams())
+    assert dict(moved.overrides)["pelvis.k_pel"] == 0.0
+    assert isinstance(dict(moved.overrides)["pelvis.k_pel"], float)

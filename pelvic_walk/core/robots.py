@@ -69,8 +69,8 @@ def make(
     items = overrides.items() if isinstance(overrides, dict) else overrides
     checked: dict[str, Any] = {}
     for dotted, value in items:
-        group, fname, _meta = meta_of(full_name(str(dotted)))
-        checked[f"{group}.{fname}"] = value
+        group, fname, meta = meta_of(full_name(str(dotted)))
+        checked[f"{group}.{fname}"] = _typed(meta, value)
     for field in ("method",):
         if field in checked:
             raise ValueError("a robot's strategy is its NAME, not an override")
@@ -133,13 +133,22 @@ def with_settings(robot: Robot, values: dict[str, Any], base: ControllerParams) 
     equal to the shared one in ``base`` is no setting of its own (dropped)."""
     mine = dict(robot.overrides)
     for dotted, value in values.items():
-        mine[stored_name(dotted)] = value
+        group, fname, meta = meta_of(full_name(dotted))
+        mine[f"{group}.{fname}"] = _typed(meta, value)
     kept = {k: v for k, v in mine.items() if not _same(base.value(k), v)}
     # its key stays (the label it had, or the one made from its settings before): a slider
     # moved for one robot changes its walk from the next tick, not which robot it is
     new = Robot(robot.strategy, tuple(sorted(kept.items())), robot.key)
     params_of(base, new)
     return new
+
+
+def _typed(meta: dict[str, Any], value: Any) -> Any:
+    """12 for a float parameter is 12.0 (as the shared parameters keep it): a robot's
+    settings then read and compare alike however they were typed."""
+    if meta.get("type") == "float" and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    return value
 
 
 def _same(a: Any, b: Any) -> bool:
