@@ -33,8 +33,10 @@ def viser_only(rule: str, html: str) -> bool:
     """A violation only viser's client can fix (docs/TEACHING.md, "Accessibility")."""
     if rule == "aria-input-field-name":  # a slider's thumb: Mantine's thumbLabel, not passed
         return 'role="slider"' in html
-    if rule == "label":  # the number box beside a slider: no id, no aria-label
-        return "mantine-NumberInput-input" in html
+    if rule == "label":  # the number box beside a slider: no id, no aria-label; a text box
+        # (the Compare folder's): viser's TextInput passes no id, so its label's `for` names
+        # nothing (viser's client labels a dropdown's and a checkbox's inputs by their id)
+        return "mantine-NumberInput-input" in html or "mantine-TextInput-input" in html
     if rule == "button-name":  # viser's settings toggle (an icon), its notice's close button
         return any(
             k in html

@@ -258,3 +258,23 @@ def test_the_live_plots_draw_each_robot_in_its_own_dashes_with_its_marker():
 if __name__ == "__main__":  # the tables of docs/TEACHING.md
     print(f"Robots (at least {MIN_DELTA_E:g} apart):\n\n{table(robot_colours())}\n")
     print(f"Overlays (at least {MIN_DELTA_E:g} apart):\n\n{table(overlay_colours())}")
+
+
+def test_a_second_and_third_robot_of_one_strategy_wear_shades_told_apart():
+    """Two robots of one strategy side by side (an MPC beside an MPC with a shorter horizon):
+    the second wears a shade of the strategy's colour and the third another, each pair
+    MIN_DELTA_E apart under every simulation; and colour is not the only cue: each has its
+    own marker and dash pattern (app.web.looks)."""
+    from app.web.looks import looks, shade
+
+    for name, c in robot_colours().items():
+        shades = (c, shade(c, 1), shade(c, 2))
+        for a, b in itertools.combinations(shades, 2):
+            for how in SIMULATIONS:
+                assert delta_e(a, b, how) >= MIN_DELTA_E, (name, a, b, how)
+    shown = looks([("mpc", "mpc"), ("short", "mpc"), ("long", "mpc"), ("fixed", "fixed")])
+    mpcs = [shown[k] for k in ("mpc", "short", "long")]
+    assert len({x.marker for x in mpcs}) == 3 and len({x.dash for x in mpcs}) == 3
+    assert len({x.color for x in mpcs}) == 3
+    assert [x.title for x in mpcs] == ["pelvic MPC", "short", "long"]
+    assert shown["fixed"].color == robot_colours()["fixed pelvis"]

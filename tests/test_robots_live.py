@@ -196,7 +196,7 @@ def test_two_mpcs_walk_each_with_its_own_horizon_and_a_change_aims_at_one_or_all
             ({"robot": "nobody", "com": {"horizon": 1.0}}, "no robot 'nobody' is shown"),
             ({"robot": "short", "walk": {"step_length": 9.0}}, "less than or equal to 0.6"),
             ({"robots": ["mpc,com.horizon=99"]}, "com.horizon = 99.0 is above the maximum"),
-            ({"robots": ["mpc", "mpc"]}, "two robots share the label 'mpc'"),
+            ({"robots": ["mpc", "mpc"]}, "two robots would both be called 'mpc'"),
             ({"robots": ["nobody"]}, "unknown method 'nobody'"),
             ({"robots": ["mpc,walk.nope=1"]}, "unknown parameter 'walk.nope'"),
             ({"robots": [{"strategy": "mpc", "label": "a,b"}]}, "without ',' or '@'"),
@@ -318,7 +318,7 @@ def test_serve_refuses_bad_robots_with_one_line(capsys):
         (["--robot", "mpc,com.horizon=9"], "argument --robot: com.horizon = 9.0 is above"),
         (["--robot", "nobody"], "argument --robot: unknown method 'nobody'"),
         (["--robot", "mpc@"], "an empty label after '@'"),
-        (["--robot", "mpc", "--robot", "mpc"], "--robot: two robots share the label 'mpc'"),
+        (["--robot", "mpc", "--robot", "mpc"], "--robot: two robots would both be called 'mpc'"),
         (["--robot", "mpc", "--methods", "fixed"], "--robot and --methods both name"),
         (["--set", "gain.k=1"], "--set: unknown parameter 'gain.k'"),
     ]:

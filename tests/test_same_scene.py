@@ -117,7 +117,11 @@ def test_the_plots_hide_a_set_they_leave_and_never_remove_one(server, frames):
         original = h.remove
         h.remove = lambda original=original: (removed.append(1), original())[1]
     plots.update(one, 1.0)
-    assert set(plots._sets) == {("fixed", "redundancy", "mpc"), ("mpc",)}
+    # the sets by their robots: (key, strategy) each
+    assert set(plots._sets) == {
+        (("fixed", "fixed"), ("redundancy", "redundancy"), ("mpc", "mpc")),
+        (("mpc", "mpc"),),
+    }
     assert all(not h.visible for h in first.values())
     assert all(h.visible for h in plots.handles.values())
     plots.update(three, 2.0)

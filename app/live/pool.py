@@ -398,6 +398,7 @@ class WorkerPool:
         robots not among ``methods`` are closed first: their slots count as free)."""
         with self._lock:
             need = len([m for m in methods if m not in session.parts])
+            # the session's robots not kept are closed before the new ones open (sync_parts)
             freed = len([m for m in session.parts if m not in methods])
             room = sum(self.robots_per_worker - w.robots for w in self._workers) + freed
             if need > room:

@@ -2,8 +2,8 @@
 explanations and the kinematic analysis (Fig. 1-2, eq. 1-5). The text lives in
 :mod:`app.web.lessons`; this module builds the controls and reads the numbers from the frames.
 
-A lesson button writes intent only (parameters from their defaults, methods, a restart, as a
-preset does) and moves the clicking browser's camera. Which lesson runs is the *session's*
+A lesson button writes intent only (parameters from their defaults, its robots, a restart,
+as a preset does) and moves the clicking browser's camera. Which lesson runs is the *session's*
 state (:class:`LessonRun`, one per session, kept beside it on the web side): every view of
 the session shows its head, text, equations and live numbers, so the students watching an
 instructor's demo read the lesson the instructor started (their buttons are off). The live
@@ -31,8 +31,8 @@ from app.live import LiveFrame, live_params
 from app.live.history import COL
 from app.live.pool import PoolFull
 from app.web.lessons import CLEAN_LIMIT_M, EXPLAIN, LESSONS, Lesson, analysis_html
+from app.web.looks import RobotLook, looks
 from controller.params import GROUPS
-from pelvic_walk.core.methods import METHOD_INFO
 
 if TYPE_CHECKING:
     from app.live.intent import Intent
@@ -64,6 +64,7 @@ COLUMNS = {  # row label of each live number (Lesson.numbers)
     "yaw": "yaw momentum now (peak, two steps)",
     "arms": "arm swing",
     "settings": "k_pel, horizon in force",
+    "differ": "its settings that differ from the other robots'",
     "phase": "phase",
     "plan": "MPC angle: now → horizon end",
     "hip": "hip advance measured / eq. 2",
@@ -121,7 +122,7 @@ class LessonRun:
         self.start_clock = start_clock  # [s] session clock the lesson's robots started at
         self.tallies: dict[str, _Tally] = {}  # since the last change
         self.since = math.inf  # [s] session clock of the last change
-        self._change: tuple | None = None  # (params, methods, restarts asked for) in force
+        self._change: tuple | None = None  # (params, robots, restarts asked for) in force
         self._change_version = 0  # the intent of the last change: frames before it not counted
         self._last_seq = -1
         self._lock = threading.Lock()  # views draw on one thread today; a lock costs nothing
@@ -130,7 +131,7 @@ class LessonRun:
         """Start the tallies anew at a change; count ``frame`` once (whichever view shows it
         first)."""
         with self._lock:
-            change = (intent.params, intent.methods, intent.reset_requests - intent.auto_restarts)
+            change = (intent.params, intent.robots, intent.reset_requests - intent.auto_restarts)
             if change != self._change:  # the "max seen" columns count from here
                 first = self._change is None
                 restarted = first or change[2] != self._change[2]  # type: ignore[index]
@@ -168,6 +169,7 @@ class LearnTab:
         self.panel = panel
         self.run: LessonRun | None = None  # the session's lesson this tab shows
         self._shown_time = -math.inf
+        self._look: dict[str, RobotLook] = {}  # the robots' looks in the table drawn
         # a view to set once the robots are drawn (the browser that started the lesson)
         self._camera: tuple[LessonRun, str, Any] | None = None
         with gui.add_folder("Guided lessons"):
@@ -215,7 +217,7 @@ class LearnTab:
         setup = lesson.setup()
         groups = {k: v for k, v in setup.items() if k in GROUPS}
         try:
-            session.set_methods(setup["methods"])
+            session.set_robots(lesson.robot_list())
         except PoolFull as exc:
             self.live.content = (
                 f"<b>Not started:</b> {html.escape(str(exc))}: this lesson needs "
@@ -318,8 +320,11 @@ class LearnTab:
         window = self.panel.session.history.window(
             2.0 * frame.robots[0].params.walk.step_time, until=frame.clock
         )
+        look = self._look = looks(frame.robots)
         head = "".join(
-            f'<th style="text-align:left;padding:2px 6px">{METHOD_INFO[r.method].title}</th>'
+            f'<th style="text-align:left;padding:2px 6px"><span aria-hidden="true" '
+            f'style="color:rgb{look[r.method].color}">{look[r.method].marker}</span> '
+            f"{html.escape(look[r.method].title)}</th>"
             for r in frame.robots
         )
         rows = []
@@ -414,6 +419,9 @@ class LearnTab:
             return "on" if r.params.arms.enabled else "<b>off</b>"
         if key == "settings":
             return f"{r.params.pelvis.k_pel:g}, {r.params.com.horizon:g} s"
+        if key == "differ":
+            look = self._look.get(r.method)
+            return html.escape(look.differs) if look and look.differs else "as the others"
         if key == "phase":
             return self._phase(r)
         if key == "plan":

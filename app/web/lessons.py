@@ -19,6 +19,8 @@ from app.web.lesson_math import analysis_html, analysis_numbers, analysis_svg, e
 from app.web.overlays import COLOUR_NAMES, DANGER, PREDICTED, REFERENCE
 from controller import strategy
 from controller.strategy import BUILTINS, FIXED, MPC, REDUNDANCY
+from pelvic_walk.core import robots as robots_
+from pelvic_walk.core.robots import Robot
 
 __all__ = [
     "CLEAN_LIMIT_M",
@@ -93,25 +95,53 @@ class Lesson:
     # above ``watch``: the text follows what the student changed
     now: Callable[[Any], str] | None = None
     own: bool = False  # the server's own strategies (serve --strategy) walk beside ``methods``
+    # robots with settings of their own (``NAME[,KEY=VALUE...][@LABEL]``, as ``serve --robot``):
+    # when given, the lesson shows these instead of one robot per method (two robots of one
+    # strategy side by side, each with its settings)
+    robot_forms: tuple[str, ...] = ()
+
+    def robot_list(self) -> tuple[Robot, ...]:
+        """The robots the lesson shows: its ``robot_forms``, or one per method and, with
+        ``own``, one per strategy the server loaded, in the registry's order."""
+        if self.robot_forms:
+            return tuple(robots_.parse(f) for f in self.robot_forms)
+        users = tuple(n for n in strategy.names() if not strategy.info(n).builtin)
+        methods = strategy.ordered(self.methods + users) if self.own else self.methods
+        return robots_.of_methods(methods)
 
     def robots(self) -> tuple[str, ...]:
-        """The robots the lesson shows: its methods and, with ``own``, every strategy the
-        server loaded, in the registry's order."""
-        users = tuple(n for n in strategy.names() if not strategy.info(n).builtin)
-        return strategy.ordered(self.methods + users) if self.own else self.methods
+        """The keys (labels) of the robots the lesson shows (:meth:`robot_list`)."""
+        return tuple(r.key for r in self.robot_list())
 
     def setup(self) -> dict[str, Any]:
-        """The preset form (as :data:`PRESETS`): parameter groups, methods, from defaults."""
+        """The preset form (as :data:`PRESETS`): parameter groups from defaults, ``methods``
+        (each robot's strategy) and ``robots`` (:meth:`robot_list`, with their settings)."""
+        shown = self.robot_list()
         return {
             "walk": self.walk,
             **self.groups,
-            "methods": list(self.robots()),
+            "methods": [r.strategy for r in shown],
+            "robots": list(shown),
             "reset_groups": True,
         }
 
     def equations_html(self) -> str:
         return equations(*self.equations)
 
+
+# Two robots of the MPC side by side, measured with `pelvic-walk simulate --method mpc
+# --step-length 0.4` (10 steps of 1.2 s):
+#   k_pel 0.25 (default): success 10/10, waist max 25.1 deg, kappa max 44.4;
+#   k_pel 0.45: success 10/10, waist max 39.7 deg, kappa max 33.4;
+#   --horizon 1.2: fell at 2.56 s; --horizon 1.0: fell at 1.57 s; --horizon 0.8: fell at 1.40 s;
+#   k_pel 0.45 with --horizon 1.2: fell at 2.55 s; with --horizon 0.8: fell at 1.39 s;
+#   --pelvis-beta 0.01: success 10/10, waist max 26.3 deg, kappa max 53.8.
+_K: dict[str, Any] = {
+    "waist": (39.7, 25.1),
+    "kappa": (33.4, 44.4),
+    "falls": ((1.2, 2.55), (0.8, 1.39)),  # k_pel 0.45
+}
+_B = {"waist": (25.1, 26.3)}
 
 _F, _M = CLEAN_LIMIT_M[FIXED], CLEAN_LIMIT_M[MPC]
 _PF, _PM = PAPER_LIMIT_M[FIXED], PAPER_LIMIT_M[MPC]
@@ -187,15 +217,22 @@ LESSONS: tuple[Lesson, ...] = (
         {"step_length": 0.40, "step_time": 1.2},
         (MPC,),
         "top",
-        "k_pel scales the reference angle for a given foot-to-pelvis distance (eq. 31): at 0.10 "
-        "the pelvis turns less and the legs must reach further (the reach and kappa rise). Raise "
-        "<b>k_pel</b> (Controls tab, folder <i>Pelvic MPC</i>) to 0.25 and 0.5 and read the "
-        "waist range, reach and kappa; then shorten the <b>Horizon H</b> (folder <i>CoM "
-        "MPC</i>: both MPCs use it) below one step (1.2 s): the MPC no longer sees the next "
-        "foothold in time.",
+        "Two MPC robots side by side, alike but for <b>k_pel</b>, which scales the reference "
+        "angle for a given foot-to-pelvis distance (eq. 31): 0.25 (the default) and 0.45 (the "
+        "hollow marker, a darker orange). The one with 0.45 turns its pelvis further "
+        f"(measured at 0.40 m: {_K['waist'][0]:.0f}° against {_K['waist'][1]:.0f}°), so its "
+        f"legs reach less far and their kappa stays lower ({_K['kappa'][0]:.0f} against "
+        f"{_K['kappa'][1]:.0f} at most). Read the waist, reach and kappa rows. Then choose "
+        "<b>Sliders act on: k_pel 0.45</b> (Controls tab, above the parameter folders) and "
+        "shorten its <b>Horizon H</b> (folder <i>CoM MPC</i>; both MPCs use it) to one "
+        "step (1.2 s) or less: that robot no longer sees the next foothold in time and falls "
+        f"within its first steps (measured: H = {_K['falls'][0][0]:g} s falls at "
+        f"{_K['falls'][0][1]:.1f} s, {_K['falls'][1][0]:g} s at {_K['falls'][1][1]:.1f} s), "
+        f"while the other keeps its 1.6 s; {FALL_HOLD_S:g} s after a fall both restart "
+        "together. <i>Sliders act on: all robots</i> gives both the same value again.",
         ("31", "37"),
-        ("settings", "waist", "reach", "kappa_legs", "status", "falls"),
-        {"pelvis": {"k_pel": 0.10}},
+        ("differ", "settings", "waist", "reach", "kappa_legs", "status", "falls"),
+        robot_forms=("mpc", "mpc,pelvis.k_pel=0.45@k_pel 0.45"),
     ),
     Lesson(
         "5. Redundancy vs the MPC's waist rate",
@@ -278,6 +315,26 @@ LESSONS: tuple[Lesson, ...] = (
         now=lambda _p: own_strategies_sentence(),
         own=True,
     ),
+    Lesson(
+        "9. What beta_pel buys",
+        "eq. 34-37; Fig. 7",
+        {"step_length": 0.40, "step_time": 1.2},
+        (MPC,),
+        "top",
+        "Two MPC robots alike but for <b>beta_pel</b>, the weight on the pelvis's yaw "
+        "acceleration in the pelvic MPC's cost (eq. 36): 1e-6 (the default) and 1e-2 (the "
+        "hollow marker). With a small beta_pel the optimised angle (eq. 37) lies on the "
+        "reference: the MPC's own plan is not seen. Raised, the acceleration costs and the plan "
+        "smooths the reference: open the <b>Inspect</b> tab, choose each robot in its "
+        f"<i>Robot</i> list and compare the {_PREDICTED} plan with the {_REFERENCE} dashed "
+        "reference; the table's <i>MPC angle</i> row and the peak change of the waist rate "
+        f"say it in numbers. Both walk at 0.40 m (measured: waist {_B['waist'][0]:.0f}° and "
+        f"{_B['waist'][1]:.0f}° at most). Move the <b>beta_pel</b> slider (folder <i>Pelvic "
+        "MPC</i>) with <i>Sliders act on</i> set to one robot to try other values beside it.",
+        ("37",),
+        ("differ", "plan", "waist", "rate", "jerk", "kappa_legs", "status"),
+        robot_forms=("mpc", "mpc,pelvis.beta=0.01@beta_pel 1e-2"),
+    ),
 )
 
 
@@ -297,11 +354,15 @@ def own_strategies_sentence() -> str:
 # Short lessons, one per layer, with the paper's equation numbers.
 EXPLAIN: dict[str, str] = {
     "Overview": (
-        "Each robot runs the same controller with the same parameters; only the **waist yaw** "
+        "Each robot runs the same controller, by default with the same parameters; only the "
+        "**waist yaw** "
         "(the pelvic rotation) differs: **fixed** keeps it at 0, **redundancy** (ref. [21]) "
         "lets the IK use it with no preview, the **pelvic-rotation MPC** plans it over the "
         "horizon. Raise the step length and watch the **reach gauges**: the fixed pelvis "
-        f"straightens its swing leg ({_DANGER}) first."
+        f"straightens its swing leg ({_DANGER}) first. A robot may also have settings of its "
+        "own (the Compare folder adds one: an MPC with a shorter horizon beside the MPC); its "
+        "label says how it differs, and *Sliders act on* chooses whether a slider moves one robot "
+        "or all."
     ),
     "CoM MPC (eq. 10-18)": (
         "A linear inverted pendulum at constant height, state [p, v, a] per axis, input = jerk "

@@ -152,9 +152,14 @@ def legend_html() -> str:
         sw(PLAN, f"plan ({n[PLAN]}): footholds"),
         sw(DANGER, f"{n[DANGER]}: leg nearly straight; fall (ring)"),
     ]
+    second = (
+        "a second robot of one strategy: a shade of its colour, a hollow marker (○) and "
+        "another line style, and always its own label"
+    )
     return (
         f"<div style='font-size:12px;line-height:1.8'>Robots (torso and head; marker on the "
-        f"label):<br>{robots}<br>{'<br>'.join(parts)}</div>"
+        f"label):<br>{robots}<br><span style='margin-left:10px'>{second}</span><br>"
+        f"{'<br>'.join(parts)}</div>"
     )
 
 

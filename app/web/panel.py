@@ -1,6 +1,15 @@
 """The viser control panel of one view: playback and timeline, views, comparison, presets,
 parameters, push, layers; and the Inspect, Plots and Learn tabs.
 
+The Compare folder shows the session's robots (a strategy, its own settings, a label: two may
+run one strategy) and adds, removes and relabels them; a refusal (a bad setting, a label taken,
+more than six robots, no room in the workers) is said there in one line and the session keeps
+its robots. "Sliders act on" chooses what the parameter sliders show and set: the value every
+robot shares (``update_params``), or one robot's own settings (``update_params(target=KEY)``).
+A strategy's own parameters (its ``Params``) get a folder of sliders each, shown while a robot
+of that strategy is; the paper's parameters a built-in strategy owns stay in the paper's
+folders.
+
 Every control only writes intent into the view's session (never the simulation). The
 parameter folders are generated from :func:`controller.params.spec` (a new gain in
 controller/params.py appears here): weights spanning decades get a log-scale slider with the
@@ -31,17 +40,21 @@ import viser
 
 from app.live import FALL_HOLD_S, SPEED_MAX, SPEED_MIN, LiveFrame, Playback, live_params
 from app.live.intent import PUSH_DURATION_MAX, PUSH_FORCE_MAX
+from app.live.pool import PoolFull
 from app.web.camera import CAMERA_VIEWS
 from app.web.learn_gui import LearnTab
 from app.web.lessons import PRESETS, warnings_for
+from app.web.looks import looks, value_text
 from app.web.overlays import COLOUR_NAMES, DANGER, legend_html
 from app.web.plots import HorizonInspector, LivePlots
 from app.web.qp_view import QpView
 from app.web.record_gui import RecordFolder
 from app.web.scene import LAYERS, SLOW_STRATEGY_MS, fall_note
 from controller import strategy
-from controller.params import GROUP_TITLES, GROUPS, ControllerParams, spec
+from controller.params import GROUP_TITLES, GROUPS, OWN_PARAMS, ControllerParams, spec
+from pelvic_walk.core import robots as robots_
 from pelvic_walk.core.methods import METHOD_INFO
+from pelvic_walk.core.robots import Robot
 
 if TYPE_CHECKING:
     from app.web.host import ViewHost
@@ -76,6 +89,7 @@ A11Y_STYLE = (
     "{outline:3px solid #1c63d5 !important;outline-offset:2px}</style>"
 )
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
+ALL_ROBOTS = "all robots"  # the sliders' target: the shared value of every robot
 PUSH_DIRECTIONS = {
     "left (+y)": (0.0, 1.0),
     "right (-y)": (0.0, -1.0),
@@ -100,6 +114,51 @@ def _hint(meta: dict[str, Any]) -> str:
     return f"Acts {when}{paper}{extra}."
 
 
+def target_note(target: str) -> str:
+    """What the sliders act on, in words (under the "Sliders act on" dropdown)."""
+    if target == ALL_ROBOTS:
+        return (
+            "The sliders show and set the value **every robot** shares (a robot's own "
+            "setting of a slider you move is dropped)."
+        )
+    return (
+        f"The sliders show and set **{html.escape(target)}**'s own values only; the other "
+        "robots keep theirs."
+    )
+
+
+def robot_names(shown: tuple[Robot, ...]) -> tuple[str, ...]:
+    """The robots as the dropdowns name them: by their titles as the scene and legends show
+    them ("pelvic MPC", "short horizon"), or by their keys if two titles were alike."""
+    look = looks((r.key, r.strategy) for r in shown)
+    titles = tuple(look[r.key].title for r in shown)
+    return (
+        titles
+        if len(set(titles)) == len(titles) and ALL_ROBOTS not in titles
+        else tuple(r.key for r in shown)
+    )
+
+
+def robots_html(shown: tuple[Robot, ...]) -> str:
+    """The robots shown, one a line: marker in its colour, label, strategy, own settings."""
+    look = looks((r.key, r.strategy) for r in shown)
+    lines = []
+    for r in shown:
+        lk = look[r.key]
+        what = METHOD_INFO[r.strategy].title if r.strategy in METHOD_INFO else r.strategy
+        own = ", ".join(value_text(k, v) for k, v in r.overrides)
+        about = ", ".join(x for x in (what if what != lk.title else "", own) if x)
+        lines.append(
+            f"<span aria-hidden='true' style='color:rgb{lk.color}'>{lk.marker}</span> "
+            f"<b>{html.escape(lk.title)}</b>" + (f": {html.escape(about)}" if about else "")
+        )
+    return (
+        "<div class='robots-shown' style='font-size:12.5px;line-height:1.6'>Robots shown:<br>"
+        + "<br>".join(lines)
+        + "</div>"
+    )
+
+
 class ControlPanel:
     """All the GUI of one view; writes intent into ``view.session``."""
 
@@ -112,6 +171,7 @@ class ControlPanel:
         self._reflected: dict[Any, Any] = {}
         self._session_id = id(view.session)
         self.controls: dict[tuple[str, str], tuple[Any, bool]] = {}  # -> (handle, log scale)
+        self.metas: dict[tuple[str, str], dict[str, Any]] = {}
         self.method_boxes: dict[str, Any] = {}
         self.read_only = bool(getattr(view, "read_only", False))
         self.writers: list[Any] = []  # the controls that change the session
@@ -213,14 +273,29 @@ class ControlPanel:
         with gui.add_folder("Compare"):
             for method in strategy.names():  # the paper's three, then the server's own
                 box = self.writer(
-                    gui.add_checkbox(METHOD_INFO[method].title, method in intent.methods)
+                    gui.add_checkbox(
+                        METHOD_INFO[method].title,
+                        any(r.strategy == method for r in intent.robots),
+                    )
                 )
                 box.on_update(lambda _e: self._methods_changed())
                 self.method_boxes[method] = box
+            self._build_robots(intent)
         with gui.add_folder("Presets", expand_by_default=False):
             for name, preset in PRESETS.items():
                 button = self.writer(gui.add_button(name, hint=preset.get("hint")))
                 button.on_click(lambda _e, name=name: self.apply_preset(name))
+        self.target = self.writer(
+            gui.add_dropdown(
+                "Sliders act on",
+                (ALL_ROBOTS, *robot_names(intent.robots)),
+                initial_value=ALL_ROBOTS,
+                hint="All robots (a shared value: a robot's own setting of it is dropped), or "
+                "one robot's own settings (the others keep theirs)",
+            )
+        )
+        self.target.on_update(lambda _e: self._target_changed())
+        self.target_note = gui.add_markdown(target_note(ALL_ROBOTS))
         for group in GROUPS:
             meta_all = spec(getattr(intent.params, group))
             with gui.add_folder(GROUP_TITLES[group], expand_by_default=group == "walk"):
@@ -229,6 +304,20 @@ class ControlPanel:
                         self._add_param(
                             group, name, meta, getattr(getattr(intent.params, group), name)
                         )
+        # a strategy's own parameters (its Params): a folder each, shown with its robots
+        self.own_folders: dict[str, Any] = {}
+        for name, cls in OWN_PARAMS.items():
+            if not strategy.is_registered(name):
+                continue
+            folder = gui.add_folder(
+                f"{METHOD_INFO[name].title} parameters", expand_by_default=False
+            )
+            with folder:
+                for fname, meta in spec(cls).items():
+                    if meta.get("gui", True):
+                        self._add_param(name, fname, meta, intent.params.value(f"{name}.{fname}"))
+            folder.visible = any(r.strategy == name for r in intent.robots)
+            self.own_folders[name] = folder
         with gui.add_folder("Push a robot", expand_by_default=False):
             gui.add_markdown(
                 "A horizontal push on the torso. The CoM MPC keeps its plan and the pelvis "
@@ -238,7 +327,7 @@ class ControlPanel:
                 f"it fell for {FALL_HOLD_S:g} s, ringed in {COLOUR_NAMES[DANGER]}, then every "
                 "robot restarts)."
             )
-            self.push_robot = self.writer(gui.add_dropdown("Robot", intent.methods))
+            self.push_robot = self.writer(gui.add_dropdown("Robot", robot_names(intent.robots)))
             self.push_force = self.writer(
                 gui.add_slider("Force [N]", 10.0, PUSH_FORCE_MAX, 10.0, 60.0)
             )
@@ -257,6 +346,45 @@ class ControlPanel:
                 box.on_update(lambda _e, key=key: self._layer_changed(key))
                 self.layer_boxes[key] = box
         self.record = RecordFolder(gui, self)
+
+    def _build_robots(self, intent: Any) -> None:
+        """The robots shown, a refusal's line, and adding, removing and relabelling one (a
+        folder of its own in the Compare folder, closed at first: the parameters stay near
+        the top)."""
+        gui = self.gui
+        self.robot_list = gui.add_html(robots_html(intent.robots))
+        self.compare_note = gui.add_markdown("")
+        with gui.add_folder("Add, relabel or remove a robot", expand_by_default=False):
+            gui.add_markdown("**Add a robot** (two may run one strategy with different settings):")
+            self.add_strategy = self.writer(
+                gui.add_dropdown(
+                    "Strategy", strategy.names(), initial_value=strategy.MPC, hint="What it runs"
+                )
+            )
+            self.add_settings = self.writer(
+                gui.add_text(
+                    "Settings",
+                    "",
+                    hint="Its own settings, e.g. com.horizon=0.8, pelvis.k_pel=0.45 "
+                    "(GROUP.NAME=VALUE, comma-separated; empty: the shared ones)",
+                )
+            )
+            self.add_label = self.writer(
+                gui.add_text("Label", "", hint="Its name on the scene, plots and tables (optional)")
+            )
+            add = self.writer(gui.add_button("Add robot", icon=viser.Icon.PLUS))
+            add.on_click(lambda _e: self._add_robot())
+            gui.add_markdown("**Relabel or remove a robot:**")
+            self.edit_robot = self.writer(
+                gui.add_dropdown(
+                    "Robot", robot_names(intent.robots), hint="The robot to relabel or remove"
+                )
+            )
+            self.new_label = self.writer(gui.add_text("New label", ""))
+            relabel = self.writer(gui.add_button("Relabel"))
+            relabel.on_click(lambda _e: self._relabel_robot())
+            remove = self.writer(gui.add_button("Remove robot", icon=viser.Icon.TRASH))
+            remove.on_click(lambda _e: self._remove_robot())
 
     def _add_param(self, group: str, name: str, meta: dict[str, Any], value: Any) -> None:
         gui = self.gui
@@ -297,6 +425,7 @@ class ControlPanel:
                 handle = gui.add_number(label, value, min=lo, max=hi, step=step, hint=_hint(meta))
         handle.on_update(lambda _e, g=group, n=name: self._param_changed(g, n))
         self.controls[(group, name)] = (self.writer(handle), log)
+        self.metas[(group, name)] = meta
 
     @staticmethod
     def _to_slider(value: float, meta: dict[str, Any]) -> float:
@@ -315,13 +444,43 @@ class ControlPanel:
         value = 10.0**handle.value if log else handle.value
         if log:
             value = float(f"{value:.3g}")
-        if getattr(getattr(self.session.intent.params, group), name) == value:
+        target = self.target_key()
+        if self.shown_params().value(f"{group}.{name}") == value:
             return
         self._reflected.pop((group, name), None)  # shown as the intent takes it (rounded)
         try:
-            self.session.update_params(**{group: {name: value}})
+            self.session.update_params(target=target, **{group: {name: value}})
         except ValueError as exc:
             self._say(f"**Not applied:** {html.escape(str(exc))}")
+
+    def target_key(self) -> str | None:
+        """The robot the sliders act on (its key), or None: every robot."""
+        return self.key_of(self.target.value)
+
+    def key_of(self, name: str) -> str | None:
+        """The key of the robot a dropdown names ``name`` (None: no such robot shown)."""
+        shown = self.session.intent.robots
+        return dict(zip(robot_names(shown), (r.key for r in shown), strict=True)).get(name)
+
+    def shown_params(self) -> ControllerParams:
+        """The parameters the sliders show: the shared ones, or the targeted robot's."""
+        intent = self.session.intent
+        key = self.target_key()
+        return intent.params if key is None else intent.params_of(key)
+
+    def _target_changed(self) -> None:
+        if getattr(self._local, "reflecting", False):
+            return
+        self.target_note.content = target_note(self.target.value)
+        # the sliders move to the values of what they act on now (the view draws again only
+        # when the session changes: a paused one may not)
+        self._local.reflecting = True
+        try:
+            for key in self.controls:
+                self._reflected.pop(key, None)
+            self._reflect_params(self.shown_params())
+        finally:
+            self._local.reflecting = False
 
     def _methods_changed(self) -> None:
         if self.guarded():
@@ -330,7 +489,70 @@ class ControlPanel:
         if not chosen:
             self._say("**Choose at least one method.**")
             return
-        self.session.set_methods(chosen)
+        shown = self.session.intent.robots
+        kept = [r for r in shown if r.strategy in chosen]
+        added = [Robot(m) for m in chosen if not any(r.strategy == m for r in kept)]
+        if all(r == Robot(r.strategy) for r in kept):  # plain robots: in the registry's order
+            self._set_robots(None, chosen)
+        else:  # robots with settings keep them; a strategy ticked joins them
+            self._set_robots(kept + added)
+
+    def _set_robots(self, shown: list[Robot] | None, methods: list[str] | None = None) -> bool:
+        """Show these robots (or one per strategy of ``methods``); a refusal is said in one
+        line in the Compare folder (the session keeps its robots)."""
+        try:
+            if shown is None:
+                self.session.set_methods(methods or [])
+            else:
+                self.session.set_robots(shown)
+        except (ValueError, PoolFull) as exc:
+            self.compare_note.content = f"**Not applied:** {html.escape(str(exc))}"
+            self._reflected_version = -1  # the checkboxes back to the robots shown
+            self._reflected.clear()
+            return False
+        self.compare_note.content = ""
+        return True
+
+    def _add_robot(self) -> None:
+        if self.guarded():
+            return
+        settings = self.add_settings.value.strip().strip(",")
+        try:
+            parsed = robots_.parse(",".join(x for x in (self.add_strategy.value, settings) if x))
+            new = robots_.make(parsed.strategy, parsed.overrides, self.add_label.value)
+        except ValueError as exc:
+            self.compare_note.content = f"**Not added:** {html.escape(str(exc))}"
+            return
+        if self._set_robots([*self.session.intent.robots, new]):
+            self.add_label.value = ""
+            self.add_settings.value = ""
+
+    def _remove_robot(self) -> None:
+        if self.guarded():
+            return
+        key = self.key_of(self.edit_robot.value)
+        self._set_robots([r for r in self.session.intent.robots if r.key != key])
+
+    def _relabel_robot(self) -> None:
+        if self.guarded():
+            return
+        key, label = self.key_of(self.edit_robot.value), self.new_label.value.strip()
+        aimed = key is not None and self.target_key() == key
+        try:
+            robot = self.session.intent.robot(str(key))
+            if not label:
+                raise ValueError("type the new label first")
+            new = robots_.make(robot.strategy, robot.overrides, label)
+        except ValueError as exc:
+            self.compare_note.content = f"**Not relabelled:** {html.escape(str(exc))}"
+            return
+        shown = [new if r.key == key else r for r in self.session.intent.robots]
+        if self._set_robots(shown):
+            self.new_label.value = ""
+            if aimed:  # the sliders keep acting on the same robot
+                names = robot_names(tuple(shown))
+                self.target.options = (ALL_ROBOTS, *names)
+                self.target.value = names[shown.index(new)]
 
     def _speed_changed(self) -> None:
         if self.guarded() or self.speed.value == self.session.intent.speed:
@@ -371,8 +593,9 @@ class ControlPanel:
             return
         dx, dy = PUSH_DIRECTIONS[self.push_dir.value]
         f = float(self.push_force.value)
+        key = self.key_of(self.push_robot.value) or str(self.push_robot.value)
         try:
-            self.session.push(self.push_robot.value, (f * dx, f * dy), float(self.push_time.value))
+            self.session.push(key, (f * dx, f * dy), float(self.push_time.value))
         except ValueError as exc:
             self._say(f"**Not pushed:** {html.escape(str(exc))}")
             return
@@ -411,10 +634,13 @@ class ControlPanel:
         if intent.version != self._reflected_version:
             self._local.reflecting = True
             try:
-                self._reflect_params(intent.params)
+                self._reflect_robots(intent)
+                self._reflect_params(self.shown_params())
                 for method, box in self.method_boxes.items():
-                    self._put(("method", method), box, method in intent.methods)
-                self.push_robot.options = intent.methods
+                    self._put(
+                        ("method", method), box, any(r.strategy == method for r in intent.robots)
+                    )
+                self.push_robot.options = robot_names(intent.robots)
                 self._put("speed", self.speed, intent.speed)
                 self.pause_button.label = "Resume" if intent.paused else "Pause"
                 self.pause_button.icon = (
@@ -446,10 +672,31 @@ class ControlPanel:
         if handle.value != value:
             handle.value = value
 
+    def _reflect_robots(self, intent: Any) -> None:
+        """The robots shown: their list, the dropdowns naming them, the own-parameter
+        folders of their strategies; the sliders' target falls back to every robot when its
+        robot is gone."""
+        keys = robot_names(intent.robots)
+        options = (ALL_ROBOTS, *keys)
+        if tuple(self.target.options) != options:
+            value = self.target.value
+            self.target.options = options
+            self.target.value = value if value in options else ALL_ROBOTS
+            self.target_note.content = target_note(self.target.value)
+        if tuple(self.edit_robot.options) != keys:
+            self.edit_robot.options = keys
+        content = robots_html(intent.robots)
+        if self.robot_list.content != content:
+            self.robot_list.content = content
+        for name, folder in self.own_folders.items():
+            visible = any(r.strategy == name for r in intent.robots)
+            if folder.visible != visible:
+                folder.visible = visible
+
     def _reflect_params(self, params: ControllerParams) -> None:
         for (group, name), (handle, log) in self.controls.items():
-            value = getattr(getattr(params, group), name)
-            meta = spec(getattr(params, group))[name]
+            value = params.value(f"{group}.{name}")
+            meta = self.metas[(group, name)]
             self._put((group, name), handle, self._to_slider(value, meta) if log else value)
 
     def _update_timeline(self, playback: Playback) -> None:
@@ -472,16 +719,17 @@ class ControlPanel:
 
     def _update_status(self, frame: LiveFrame, playback: Playback, intent: Any) -> None:
         lines = [playback.describe()]
+        look = looks(frame.robots)
         for r in frame.robots:
             if r.error is not None:
                 lines.append(
-                    f"**{METHOD_INFO[r.method].title}**: ⚠ stopped: `{r.error}`; it restarts "
+                    f"**{look[r.method].title}**: ⚠ stopped: `{r.error}`; it restarts "
                     "with the others (or press *Restart all robots together*)"
                 )
                 continue
             if r.fell:
                 when, why, restart = fall_note(r, frame)
-                lines.append(f"**{METHOD_INFO[r.method].title}**: ⚠ fell {when}, {why}; {restart}")
+                lines.append(f"**{look[r.method].title}**: ⚠ fell {when}, {why}; {restart}")
                 continue
             elif r.waiting:
                 state = "standing by to start in phase"
@@ -499,16 +747,28 @@ class ControlPanel:
                 else ""
             )
             lines.append(
-                f"**{METHOD_INFO[r.method].title}**: {r.status}, {kappa}{state}, falls "
-                f"{r.falls}{slow}"
+                f"**{look[r.method].title}**: {r.status}, {kappa}{state}, falls {r.falls}{slow}"
             )
-        lines += [f"⚠ {w}" for w in warnings_for(intent.params, intent.methods)]
+        lines += [f"⚠ {w}" for w in robot_warnings(intent)]
         extra = self.view.alerts()
         if self._message and time.monotonic() - self._message_at < MESSAGE_S:
             extra.append(self._message)
         text = "  \n".join(extra + lines)
         if self.status.content != text:
             self.status.content = text
+
+
+def robot_warnings(intent: Any) -> list[str]:
+    """Settings known to break walking (:func:`warnings_for`): those of the shared values for
+    the robots shown, then a robot's own (its settings of its own), named by its title."""
+    shared = warnings_for(intent.params, tuple(r.strategy for r in intent.robots))
+    out = list(shared)
+    titles = robot_names(intent.robots)
+    for r, title in zip(intent.robots, titles, strict=True):
+        if r.overrides:
+            mine = warnings_for(intent.params_of(r.key), (r.strategy,))
+            out += [f"{title}: {w}" for w in mine if w not in shared]
+    return out
 
 
 def kappa_text(kappa: float) -> str:

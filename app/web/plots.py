@@ -16,6 +16,7 @@ import viser
 import viser.uplot
 
 from app.live.session import SessionView
+from app.web.looks import looks
 from app.web.overlays import DANGER, MEASURED, PLAN, PREDICTED, REFERENCE
 from controller import strategy
 from pelvic_walk.core.frames import LiveFrame
@@ -119,18 +120,19 @@ class LivePlots:
         # property updates after its removals: an update sent just before a removal fails on
         # the page as "Tried to update non-existent component", a starved page's batch holding
         # several of them.)
-        self._sets: dict[tuple[str, ...], dict[str, Any]] = {}
+        self._sets: dict[tuple[tuple[str, str], ...], dict[str, Any]] = {}
         self._scales: dict[str, tuple] = {}
-        self._methods: tuple[str, ...] = ()
+        self._methods: tuple[tuple[str, str], ...] = ()  # the robots': (key, strategy)
         self._last: tuple[float, float] | None = None  # (frame clock, wall time of update)
 
     def _invalidate(self) -> None:
         self._last = None
 
     def update(self, frame: LiveFrame, now: float) -> None:
+        shown = tuple((r.method, r.strategy) for r in frame.robots)
         methods = tuple(r.method for r in frame.robots)
-        if methods != self._methods:
-            self._build(methods)
+        if shown != self._methods:
+            self._build(shown)
         if self._last is not None and (
             (not frame.paused and now - self._last[1] < 1.0 / PLOT_HZ)
             or (frame.paused and frame.clock == self._last[0])
@@ -179,7 +181,7 @@ class LivePlots:
                 if log:
                     handle.axes = (LIVE_X, log_axis(lo, hi))
 
-    def _build(self, methods: tuple[str, ...]) -> None:
+    def _build(self, methods: tuple[tuple[str, str], ...]) -> None:
         """Show the plots of these robots (made the first time), hide the others."""
         for shown, handles in self._sets.items():
             if shown != methods:
@@ -196,18 +198,19 @@ class LivePlots:
         self._scales = {}
         self._last = None
 
-    def _make(self, methods: tuple[str, ...]) -> dict[str, Any]:
+    def _make(self, methods: tuple[tuple[str, str] | str, ...]) -> dict[str, Any]:
         handles: dict[str, Any] = {}
         # each robot's line in its colour and its own dash pattern, its legend entry with its
-        # marker: told apart without colour too
+        # marker and label: told apart without colour too (app.web.looks)
+        look = looks(methods)
         robots = tuple(
             viser.uplot.Series(
-                label=METHOD_INFO[m].tag,
-                stroke=css(METHOD_INFO[m].color),
+                label=look[m].tag,
+                stroke=css(look[m].color),
                 width=2,
-                **({"dash": METHOD_INFO[m].dash} if METHOD_INFO[m].dash else {}),
+                **({"dash": look[m].dash} if look[m].dash else {}),
             )
-            for m in methods
+            for m in (x if isinstance(x, str) else x[0] for x in methods)
         )
         x_axis = viser.uplot.Series(label="t - now [s]")
 
@@ -347,13 +350,14 @@ class HorizonInspector:
     def update(self, frame: LiveFrame, now: float) -> None:
         self._shown = (frame, now)
         methods = tuple(r.method for r in frame.robots)
-        titles = tuple(METHOD_INFO[m].title for m in methods)
+        look = looks(frame.robots)
+        titles = tuple(look[m].title for m in methods)
         if tuple(self.robot.options) != titles and methods:
             self._by_title = dict(zip(titles, methods, strict=True))
             self.robot.options = titles
             if self.robot.value not in titles:
-                first = strategy.MPC if strategy.MPC in methods else methods[0]
-                self.robot.value = METHOD_INFO[first].title
+                mpcs = [r.method for r in frame.robots if r.strategy == strategy.MPC]
+                self.robot.value = look[mpcs[0] if mpcs else methods[0]].title
         method = self._by_title.get(self.robot.value)
         r = frame.robot(method) if methods and method is not None else None
         if r is None or r.horizon is None:
@@ -408,7 +412,7 @@ class HorizonInspector:
             else ""
         )
         self.caption.content = (
-            f"**{METHOD_INFO[r.method].title}** at t = {frame.clock:.2f} s ({phase}, step "
+            f"**{look[r.method].full}** at t = {frame.clock:.2f} s ({phase}, step "
             f"{max(r.step_index, 0)}): horizon {h.t[-1]:.1f} s, {len(h.t)} samples.{stopped}"
         )
 

@@ -73,7 +73,10 @@ def qp_html(r: RobotFrame | None, clock: float) -> str:
             '<div class="qp-view" data-t="">The QP view appears once the robot has ticked '
             "(resume or step).</div>"
         )
-    title = html.escape(METHOD_INFO[r.method].title) if r.method in METHOD_INFO else r.method
+    # the robot's label (and its strategy when the label is not the strategy's name)
+    name = r.strategy
+    what = METHOD_INFO[name].title if name in METHOD_INFO else name
+    title = html.escape(what if r.method == name else f"{r.method} ({what})")
     cols = "".join(_layer_html(e) for e in rec.layers)
     return (
         f'<div class="qp-view" data-t="{rec.t:.3f}" data-method="{html.escape(r.method)}" '

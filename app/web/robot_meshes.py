@@ -92,16 +92,21 @@ class RobotMeshes:
         self.handles: dict[str, Any] = {}
         self._methods: tuple[str, ...] = ()
 
-    def layout(self, methods: tuple[str, ...]) -> None:
-        """(Re)create the handles for these robots (instance colours carry the method)."""
+    def layout(
+        self, methods: tuple[str, ...], colors: tuple[tuple[int, int, int], ...] | None = None
+    ) -> None:
+        """(Re)create the handles for these robots (instance colours carry the method: its
+        strategy's, or ``colors``, one a robot)."""
+        if colors is None:
+            colors = tuple(METHOD_INFO[m].color for m in methods)
         for h in self.handles.values():
             h.remove()
         self.handles = {}
         n = len(methods)
         for kind, (mesh, body, _p, _R, scale, rgb, tint) in self.kinds.items():
             lit = np.array([mesh_color(c) for c in rgb], np.uint8).reshape(-1, 3)
-            colors = np.concatenate(
-                [np.where(tint[:, None], mesh_color(METHOD_INFO[m].color), lit) for m in methods]
+            instance_colors = np.concatenate(
+                [np.where(tint[:, None], mesh_color(c), lit) for c in colors]
             ).astype(np.uint8)
             k = len(body) * n
             self.handles[kind] = self.scene.add_batched_meshes_simple(
@@ -111,7 +116,7 @@ class RobotMeshes:
                 batched_wxyzs=np.tile([1.0, 0, 0, 0], (k, 1)).astype(np.float32),
                 batched_positions=np.zeros((k, 3), np.float32),
                 batched_scales=np.tile(scale, (n, 1)),
-                batched_colors=colors,
+                batched_colors=instance_colors,
                 lod="off",
             )
         self._methods = methods

@@ -11,7 +11,8 @@ and colours: a capsule is a cylinder and two spheres), so a frame moves them wit
 (a sphere needs no orientation); each overlay is one handle for all robots; world-fixed
 overlays sit under one frame that follows the robots, so they are re-sent only when they
 change; overlays are refreshed at ``OVERLAY_HZ`` and labels at ``LABEL_HZ``. Each robot wears
-its method's colour (``pelvic_walk.core.methods.METHOD_INFO``) on its torso and head; the overlays
+its strategy's colour (``pelvic_walk.core.methods.METHOD_INFO``; a second robot of one strategy a
+shade of it, ``app.web.looks``) on its torso and head; the overlays
 use one
 colour per meaning (``app.web.overlays``), never a method colour.
 
@@ -23,7 +24,9 @@ lying behind the others included, while the footholds and the floor stay fixed t
 A fallen robot gets a vermilion ring on the floor and a label saying when and why it fell and
 when the session restarts every robot (app.live.session.FALL_HOLD_S). A robot its strategy
 stopped (it raised) stays in view too, with its error on its label, until the restart.
-Each label starts with the robot's marker (``MethodInfo.marker``), a cue that is not colour;
+Each label starts with the robot's marker (``MethodInfo.marker``, hollow for a second robot of
+one strategy), a cue that is not colour, then its label and the settings by which it differs
+from the others (``short horizon · H=0.8 s``);
 the outermost labels on the screen are anchored at their inner edge, so their text extends
 toward the middle and never out of the frame.
 
@@ -47,6 +50,7 @@ import viser
 from app.live import FALL_HOLD_S, LiveFrame, RobotFrame
 from app.live.history import FrameStore
 from app.web.camera import CAMERA_VIEWS, camera_pose, label_point, slot_offset
+from app.web.looks import looks
 from app.web.overlays import (
     DANGER,
     EMPTY_SEG,
@@ -76,7 +80,6 @@ from app.web.overlays import (
 from app.web.qp_marks import LimitMarks
 from app.web.robot_meshes import RobotMeshes
 from models.dyros_jet import FOOT_SIZE
-from pelvic_walk.core.methods import METHOD_INFO
 
 LAYERS: dict[str, tuple[str, bool]] = {  # key -> (GUI label, shown by default)
     "robots": ("Robots", True),
@@ -166,6 +169,7 @@ class SceneView:
         self.limit_marks = LimitMarks(sc, model)  # joints the IK holds at a limit (QP inspector)
         self.labels: list[Overlay] = []
         self._methods: tuple[str, ...] = ()
+        self._strategies: tuple[str, ...] = ()  # the strategies of the robots laid out
         self._overlay_time = self._label_time = -math.inf
         self._keys: dict[str, Any] = {}
         self.camera_view = "follow"  # the last view asked for: how robots and labels lie
@@ -275,15 +279,17 @@ class SceneView:
             label.handle.visible = self.layers["labels"]
         self._overlay_time = -math.inf
 
-    def _layout(self, methods: tuple[str, ...]) -> None:
-        self.robots.layout(methods)
+    def _layout(self, robots: tuple[RobotFrame, ...]) -> None:
+        methods = tuple(r.method for r in robots)
+        shown = looks(robots)
+        self.robots.layout(methods, tuple(shown[m].color for m in methods))
         for label in self.labels:
             label.handle.remove()
         self.labels = [
             Overlay(
                 self.scene.add_label(
                     f"/world/label_{i}",
-                    METHOD_INFO[m].title,
+                    shown[m].title,
                     font_screen_scale=1.1,
                     anchor="bottom-center",  # the text above its point (from above: +y)
                     visible=self.layers["labels"],
@@ -293,6 +299,7 @@ class SceneView:
         ]
         refit = len(methods) != len(self._methods)
         self._methods = methods
+        self._strategies = tuple(r.strategy for r in robots)
         self._keys.clear()
         self._apply_layers()
         if refit and methods:  # the views fitted for the number of robots now shown
@@ -308,8 +315,8 @@ class SceneView:
     def draw(self, frame: LiveFrame, kept: FrameStore | None = None) -> None:
         """Update the scene from one published frame (only what changed is sent)."""
         methods = tuple(r.method for r in frame.robots)
-        if methods != self._methods:
-            self._layout(methods)
+        if methods != self._methods or self._strategies != tuple(r.strategy for r in frame.robots):
+            self._layout(frame.robots)
         if not frame.robots:
             return
         robots = frame.robots
@@ -532,7 +539,8 @@ def label_text(r: RobotFrame, frame: LiveFrame, compact: bool = False) -> str:
     x (one stopped or fallen behind, the view zoomed out) and their labels crowd: a walking
     robot's label is its first line, a stopped or fallen one's says what happened without
     the restart line (the status area says it all)."""
-    head = METHOD_INFO[r.method].tag  # its marker and title: "■ fixed pelvis"
+    # its marker, title and the settings that differ: "■ fixed pelvis", "○ short · H=0.8 s"
+    head = looks(frame.robots if frame.robot(r.method) is not None else (r,))[r.method].full
     if r.error is not None:
         rest = "" if compact else "\nRestart all robots together runs it again"
         return f"⚠ {head} STOPPED\n{wrap(r.error, 40 if compact else 48)}{rest}"

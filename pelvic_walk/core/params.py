@@ -52,7 +52,8 @@ def convert(group: str, name: str, text: str, meta: dict[str, Any]) -> Any:
     try:
         value: Any = int(text) if kind == "int" else float(text)
     except ValueError:
-        raise ValueError(f"{where} must be a number, got {text!r}") from None
+        what = "an integer" if kind == "int" else "a number"
+        raise ValueError(f"{where} must be {what}, got {text!r}") from None
     if isinstance(value, float) and not math.isfinite(value):
         raise ValueError(f"{where} must be finite, got {text!r}")
     return value

@@ -17,7 +17,7 @@ from typing import Any
 
 from controller import strategy
 from controller.params import ControllerParams, resolve
-from pelvic_walk.core.params import convert, meta_of
+from pelvic_walk.core.params import convert, fields, meta_of
 
 # a label: shown on tags and legends, and sent in URLs and commands; no ',' or '@' (the
 # robot form's separators), no control characters
@@ -69,8 +69,8 @@ def make(
     items = overrides.items() if isinstance(overrides, dict) else overrides
     checked: dict[str, Any] = {}
     for dotted, value in items:
-        group, fname, _meta = meta_of(str(dotted))
-        checked[f"{group}.{fname}"] = value
+        group, fname, meta = meta_of(full_name(str(dotted)))
+        checked[f"{group}.{fname}"] = _typed(meta, value)
     for field in ("method",):
         if field in checked:
             raise ValueError("a robot's strategy is its NAME, not an override")
@@ -79,6 +79,20 @@ def make(
     if not LABEL_PATTERN.match(robot.key):
         raise ValueError(f"robot label {robot.key!r}: 1-40 characters, without ',' or '@'")
     return robot
+
+
+def full_name(name: str) -> str:
+    """A parameter's ``GROUP.NAME`` from its name alone when one group has it (``k_pel`` ->
+    ``pelvis.k_pel``; a robot's settings are typed in a panel, where the labels show short
+    names); a dotted name as it is. ValueError for a bare name two groups share."""
+    if "." in name:
+        return name
+    found = [f"{g}.{n}" for g, n, _meta in fields(own=True) if n == name]
+    if len(found) == 1:
+        return found[0]
+    if found:
+        raise ValueError(f"{name!r} is ambiguous: write {' or '.join(found)}")
+    return name  # meta_of says it is unknown, with the known names
 
 
 def parse(text: str) -> Robot:
@@ -94,7 +108,7 @@ def parse(text: str) -> Robot:
         dotted, eq, rhs = a.partition("=")
         if not eq or not rhs.strip():
             raise ValueError(f"robot {text!r}: expected KEY=VALUE, got {a!r}")
-        group, fname, meta = meta_of(dotted.strip())
+        group, fname, meta = meta_of(full_name(dotted.strip()))
         overrides[f"{group}.{fname}"] = convert(group, fname, rhs, meta)
     return make(name, overrides, label)
 
@@ -119,13 +133,22 @@ def with_settings(robot: Robot, values: dict[str, Any], base: ControllerParams) 
     equal to the shared one in ``base`` is no setting of its own (dropped)."""
     mine = dict(robot.overrides)
     for dotted, value in values.items():
-        mine[stored_name(dotted)] = value
+        group, fname, meta = meta_of(full_name(dotted))
+        mine[f"{group}.{fname}"] = _typed(meta, value)
     kept = {k: v for k, v in mine.items() if not _same(base.value(k), v)}
     # its key stays (the label it had, or the one made from its settings before): a slider
     # moved for one robot changes its walk from the next tick, not which robot it is
     new = Robot(robot.strategy, tuple(sorted(kept.items())), robot.key)
     params_of(base, new)
     return new
+
+
+def _typed(meta: dict[str, Any], value: Any) -> Any:
+    """12 for a float parameter is 12.0 (as the shared parameters keep it): a robot's
+    settings then read and compare alike however they were typed."""
+    if meta.get("type") == "float" and isinstance(value, int) and not isinstance(value, bool):
+        return float(value)
+    return value
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -147,10 +170,18 @@ def check_all(robots: Sequence[Robot]) -> tuple[Robot, ...]:
         raise ValueError("a session shows at least one robot")
     if len(robots) > MAX_ROBOTS:
         raise ValueError(f"a session shows at most {MAX_ROBOTS} robots, got {len(robots)}")
-    keys = [r.key for r in robots]
-    twice = sorted({k for k in keys if keys.count(k) > 1})
-    if twice:
-        raise ValueError(f"two robots share the label {twice[0]!r}: give one another (@LABEL)")
+    # a robot is named by its key, and one named after its strategy is shown by the strategy's
+    # title ("mpc" as "pelvic MPC"): no two robots may answer to the same name
+    names: dict[str, int] = {}
+    for i, r in enumerate(robots):
+        shown = [r.key]
+        if r.key == r.strategy:
+            shown.append(strategy.info(r.strategy).label)
+        for name in shown:
+            if names.setdefault(name.casefold(), i) != i:
+                raise ValueError(
+                    f"two robots would both be called {name!r}: give one of them another label"
+                )
     return robots
 
 
