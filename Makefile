@@ -5,7 +5,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 TEST_STAMP := $(VENV)/.installed-test
 
-.PHONY: run test check lint clean chromium peers notebook
+.PHONY: run test check check-ray lint clean chromium peers notebook
 
 $(BIN)/python:
 	@$(PY) -c 'import sys; assert sys.version_info[:2] == (3, 11)' 2>/dev/null \
@@ -52,6 +52,11 @@ test: $(TEST_STAMP) $(KERNELS) chromium
 # no load test, no mypy (tests/conftest.py marks them). make test still runs everything.
 check: $(TEST_STAMP) $(KERNELS)
 	$(BIN)/python -m pytest -q -n 2 --dist loadgroup -m "not browser and not slow"
+
+# The Ray set alone (live sessions on Ray: serve --ray on a local instance, the pool's tests on
+# Ray actors, a two-node cluster losing a node; about a minute). make test runs it too.
+check-ray: $(TEST_STAMP) $(KERNELS)
+	$(BIN)/python -m pytest -q -m ray
 
 # Style, types and structure: ruff's rules and formatting everywhere (the notebooks' code
 # cells too), mypy on app, controller and pelvic_walk, the import contracts between the
