@@ -66,7 +66,10 @@ def _draw(view, clock=[0.0]) -> None:  # noqa: B006 (a clock that moves on betwe
 
 
 def _press(panel, text: str = "", label: str = "", name: str = "mpc") -> None:
-    panel.add_strategy.value, panel.add_settings.value, panel.add_label.value = name, text, label
+    from pelvic_walk.core.methods import METHOD_INFO
+
+    title = METHOD_INFO[name].title  # the dropdown shows the strategies' titles
+    panel.add_strategy.value, panel.add_settings.value, panel.add_label.value = title, text, label
     panel._add_robot()
 
 
@@ -79,7 +82,10 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     assert intent.methods == ("fixed", "mpc", "short horizon")
     short = intent.robot("short horizon")
     assert (short.strategy, short.overrides) == ("mpc", (("com.horizon", 0.8),))
-    assert panel.compare_note.content == ""
+    assert panel.compare_note.content == (
+        "Added **short horizon**; all robots restarted together, on one clock."
+    )
+    assert panel.add_strategy.options == ("fixed pelvis", "redundancy", "pelvic MPC", "panel gain")
     assert intent.params_of("short horizon").com.horizon == 0.8
     assert intent.params_of("mpc").com.horizon == intent.params.com.horizon == 1.6
     _draw(view)
@@ -90,17 +96,20 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     assert tuple(panel.edit_robot.options) == names
     assert tuple(panel.push_robot.options) == names
 
-    # refusals: one line in the Compare folder, the robots unchanged
+    # refusals: one short line in the Compare folder, as the core says them, the robots
+    # unchanged; a short name read when one group has it
     for text, label, said in (
-        ("com.horizon=99", "far", "com.horizon"),
-        ("com.nonsense=1", "x", "unknown parameter"),
-        ("com.horizon=1.0", "short horizon", "share the label"),
+        ("com.horizon=99", "far", "com.horizon = 99.0 is above the maximum 3.0 s"),
+        ("com.nonsense=1", "x", "unknown parameter 'com.nonsense' (one of: walk.step_length, "),
+        ("com.horizon=1.0", "short horizon", "called 'short horizon': give one of them another"),
+        ("alpha=2", "x", "'alpha' is ambiguous: write com.alpha or pelvis.alpha"),
         ("", "a,b", "label"),
     ):
         _press(panel, text, label)
         note = panel.compare_note.content
-        assert note.startswith("**Not") and said in note and "\n" not in note, note
-        assert "Traceback" not in note
+        assert note.startswith("**Not added:** ") and said in note and "\n" not in note, note
+        assert "Traceback" not in note and "@LABEL" not in note and "&#x27;" not in note, note
+        assert len(note) < 200, "a long message pushes the form down the panel"
         assert sim.intent.methods == ("fixed", "mpc", "short horizon")
     _press(panel, "com.horizon=1.2", "H 1.2")
     _press(panel, "", "", name="redundancy")
@@ -114,6 +123,7 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     for key in ("H 1.2", "redundancy", "k 0.45"):
         panel.edit_robot.value = key
         panel._remove_robot()
+    assert panel.compare_note.content == "Removed **k 0.45**; the others restarted together."
     assert sim.intent.methods == ("fixed", "mpc", "short horizon")
     _draw(view)
     panel.target.value = "short horizon"
@@ -122,12 +132,25 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     panel._relabel_robot()
     assert sim.intent.methods == ("fixed", "mpc", "H 0.8")
     assert sim.intent.robot("H 0.8").overrides == (("com.horizon", 0.8),)
-    assert panel.target.value == "H 0.8"
+    assert panel.target.value == "H 0.8" and panel.target_key() == "H 0.8"
+    assert "short horizon is now H 0.8" in panel.target_note.content
+    assert panel.compare_note.content.startswith("Relabelled **short horizon** as **H 0.8**")
     panel.edit_robot.value, panel.new_label.value = "H 0.8", "mpc"
     panel._relabel_robot()
-    assert panel.compare_note.content.startswith("**Not applied:**")
-    assert "share the label" in panel.compare_note.content
+    assert panel.compare_note.content.startswith("**Not relabelled:** two robots would both")
+    assert "another label" in panel.compare_note.content
     assert sim.intent.methods == ("fixed", "mpc", "H 0.8")
+    _draw(view)
+    assert panel.target.value == "H 0.8"
+
+    # the robot the sliders act on removed: they act on all robots again, and say why
+    panel.edit_robot.value = "H 0.8"
+    panel._remove_robot()
+    assert sim.intent.methods == ("fixed", "mpc")
+    assert panel.target.value == "all robots" and panel.target_key() is None
+    assert tuple(panel.target.options) == ("all robots", "fixed pelvis", "pelvic MPC")
+    assert panel.target_note.content.startswith("H 0.8 was removed. The sliders show and set")
+    _press(panel, "com.horizon=0.8", "H 0.8")  # back as it was for the next lines
 
     # a strategy's checkbox: the robots with settings keep them
     panel.method_boxes["fixed"].value = False
@@ -279,22 +302,23 @@ def test_lesson_9_compares_beta_pel(panel_view):
     panel.learn.start(i)
     intent = sim.intent
     assert [r.strategy for r in intent.robots] == ["mpc", "mpc"]
-    assert intent.params_of("beta_pel 1e-2").pelvis.beta == 0.01
+    assert intent.params_of("beta_pel 0.01").pelvis.beta == 0.01
     assert intent.params_of("mpc").pelvis.beta == 1e-6
     try:
         deadline = time.monotonic() + 120
-        while "β_pel=0.01" not in panel.learn.live.content:
+        while "beta_pel=0.01" not in panel.learn.live.content:
             assert time.monotonic() < deadline, panel.learn.live.content
             sim.wait_frame(timeout=30)
             _draw(view)
     finally:
         sim.wait_applied(sim.pause(), 60)
     table = panel.learn.live.content
-    assert "β_pel=1e-06" in table and "beta_pel 1e-2" in table
+    assert "beta_pel=1e-6" in table and "beta_pel 0.01" in table
+    assert "β" not in table, "one notation: the sliders' (beta_pel)"
     # the scene's tags: the label says the setting already, the plain MPC's says its value
     tags = [str(x.handle.text).split("\n")[0] for x in view.scene.labels]
-    assert tags[0].startswith("● pelvic MPC · β_pel=1e-06"), tags
-    assert tags[1].startswith("○ beta_pel 1e-2 · β_pel=0.01"), tags
+    assert tags[0].startswith("● pelvic MPC · beta_pel=1e-6"), tags
+    assert tags[1].startswith("○ beta_pel 0.01") and "=0.01" not in tags[1], tags
 
 
 def _robots(*forms: str):
