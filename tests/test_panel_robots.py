@@ -204,8 +204,13 @@ def test_sliders_act_on_the_robot_chosen_or_on_all(panel_view):
     panel.target.value = "short"
     panel._target_changed()
     sim.wait_applied(sim.set_robots(_robots("fixed", "mpc")))
+    shared = sim.intent.params
+    steps.value = 0.25  # moved before the view drew the change: not for every robot
+    assert sim.intent.params == shared, "a slider aimed at a robot gone set every robot's"
     _draw(view)
     assert panel.target.value == "all robots" and "every robot" in panel.target_note.content
+    assert panel.target_note.content.startswith("short is no longer shown. ")
+    assert steps.value == shared.walk.step_length
 
 
 def test_a_strategys_own_parameters_get_their_folder(panel_view):

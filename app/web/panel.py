@@ -489,6 +489,9 @@ class ControlPanel:
         if log:
             value = float(f"{value:.3g}")
         target = self.target_key()
+        if target is None and self._target is not None:  # its robot went (not drawn yet)
+            self._say("**Not applied:** the robot the sliders acted on is no longer shown.")
+            return
         if self.shown_params().value(f"{group}.{name}") == value:
             return
         self._reflected.pop((group, name), None)  # shown as the intent takes it (rounded)
