@@ -298,6 +298,36 @@ def test_lesson_4_shows_two_mpcs_and_the_settings_that_differ(panel_view):
     assert isinstance(panel.learn.run, LessonRun)
 
 
+def test_lesson_4_table_while_a_robot_lies_fallen(panel_view):
+    """A short horizon fells the k_pel 0.45 robot (measured: H = 0.8 s falls at 1.4 s): while
+    it lies, its column keeps its settings, and its fall enters none of the maxima."""
+    from app.web.lessons import LESSONS
+
+    sim, view = panel_view
+    panel = view.panel
+    panel.learn.start(3)
+    sim.wait_applied(sim.update_params(target="k_pel 0.45", com={"horizon": 0.8}), 60)
+    try:
+        deadline = time.monotonic() + 120
+        f = sim.wait_frame(timeout=30)
+        while not (f is not None and f.robot("k_pel 0.45").fell):
+            assert time.monotonic() < deadline, "the robot with H = 0.8 s did not fall"
+            f = sim.wait_frame(f.seq if f else -1, timeout=30)
+            _draw(view)
+        for _ in range(5):  # a few frames of it lying there
+            f = sim.wait_frame(f.seq, timeout=30)
+            _draw(view)
+    finally:
+        sim.wait_applied(sim.pause(), 60)
+    _draw(view)
+    assert panel.learn.lesson is LESSONS[3]
+    table = panel.learn.live.content
+    assert "fell at t =" in table and "H=0.8 s, k_pel=0.45" in table, table
+    tally = panel.learn.run.tallies["k_pel 0.45"]
+    kappa, reach = tally.kappa_max, tally.reach_max
+    assert 1.0 < kappa < 1e3 and 0.5 < reach < 1.0, "the fall entered a maximum"
+
+
 def test_lesson_9_compares_beta_pel(panel_view):
     from app.web.lessons import LESSONS
 

@@ -12,9 +12,11 @@ numbers are computed on the display thread from the frames the views show and th
 the time" columns count from the last change (the lesson's start, a parameter, the robots
 shown, a restart asked for; not the session's own restart after a fall), so a change's effect
 can be read, and every view reads the same tallies (each frame is counted once, whichever
-view draws it first); the falls count from the last restart asked for (the lesson's). The
-lesson's text follows the state (``Lesson.now``), and when the numbers cannot follow the
-robots (changed by hand, waiting for a restart), the tab says so rather than freezing.
+view draws it first); a fall enters no maximum (from the second before it was seen until the
+restart), nor the last two steps' rows. The falls count from the last restart asked for (the
+lesson's). The lesson's text follows the state (``Lesson.now``), and when the numbers cannot
+follow the robots (changed by hand, waiting for a restart), the tab says so rather than
+freezing.
 """
 
 from __future__ import annotations
