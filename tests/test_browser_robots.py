@@ -162,6 +162,19 @@ def test_lesson_4_two_mpcs_and_a_slider_aimed_at_one(tmp_path):
         wait_until(lambda: added.count() >= 1 and added.first.is_visible(), "the Add line")
         scroll_into_view(added.first)
         screenshot(page, "robots_added.png")
+        # a refusal: the core's words as they come, its long list of names cut short
+        box = scene.locator("label", has_text=re.compile("^Settings$")).first
+        box = box.locator("xpath=ancestor::div[.//input][1]").locator("input").first
+        box.fill("k=1")
+        wait_until(lambda: panel.add_settings.value == "k=1", "the Settings box's text")
+        press(scene.get_by_role("button", name="Add robot"))
+        refused = scene.get_by_text(
+            "Not added: unknown parameter 'k' (one of: walk.step_length, walk.step_time, ...)",
+            exact=False,
+        )
+        wait_until(lambda: refused.count() >= 1, "the refusal in one short line")
+        screenshot(page, "robots_refused.png")
+        box.fill("")
         # the robot the sliders act on removed: they act on all robots again, and say so
         panel.edit_robot.value = "k_pel 0.45"
         press(scene.get_by_role("button", name="Remove robot"))
