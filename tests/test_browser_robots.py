@@ -5,11 +5,14 @@ moved in the page then changes that robot's parameters only (read back through
 
 Screenshots go to ``tests/artifacts/`` (robots_lesson4.png: the scene's labels;
 robots_sliders.png: the panel with the sliders' target; robots_compare.png: the Compare
-folder; robots_inspect.png: the Inspect tab), for people to look at.
+folder; robots_inspect.png: the Inspect tab; robots_added.png and robots_removed.png: the
+Compare folder after adding a robot and removing the one the sliders acted on), for people
+to look at.
 """
 
 from __future__ import annotations
 
+import re
 import time
 
 import pytest
@@ -140,5 +143,46 @@ def test_lesson_4_two_mpcs_and_a_slider_aimed_at_one(tmp_path):
         caption = scene.get_by_text("○ k_pel 0.45 · step=0.3 m", exact=False)
         wait_until(lambda: caption.count() >= 1, "the inspector's caption of the second robot")
         screenshot(page, "robots_inspect.png")
+
+        # a robot added from the page: one line says so (every robot restarts with it)
+        open_tab(scene, "Controls")
+        assert scene.get_by_text("Settings, for example:", exact=False).first.is_visible()
+        for label, value, handle in (
+            ("Settings", "k_pel=0.35", panel.add_settings),
+            ("Label", "k 0.35", panel.add_label),
+        ):
+            tag = scene.locator("label", has_text=re.compile(f"^{label}$")).first
+            scroll_into_view(tag)
+            box = tag.locator("xpath=ancestor::div[.//input][1]").locator("input").first
+            box.fill(value)
+            wait_until(lambda h=handle, v=value: h.value == v, f"the {label} box's text")
+        press(scene.get_by_role("button", name="Add robot"))
+        wait_until(lambda: session.intent.methods == (*keys, "k 0.35"), "the robot added")
+        added = scene.get_by_text("Added k 0.35; all robots restarted together", exact=False)
+        wait_until(lambda: added.count() >= 1 and added.first.is_visible(), "the Add line")
+        scroll_into_view(added.first)
+        screenshot(page, "robots_added.png")
+        # a refusal: the core's words as they come, its long list of names cut short
+        box = scene.locator("label", has_text=re.compile("^Settings$")).first
+        box = box.locator("xpath=ancestor::div[.//input][1]").locator("input").first
+        box.fill("k=1")
+        wait_until(lambda: panel.add_settings.value == "k=1", "the Settings box's text")
+        press(scene.get_by_role("button", name="Add robot"))
+        refused = scene.get_by_text(
+            "Not added: unknown parameter 'k' (one of: walk.step_length, walk.step_time, ...)",
+            exact=False,
+        )
+        wait_until(lambda: refused.count() >= 1, "the refusal in one short line")
+        screenshot(page, "robots_refused.png")
+        box.fill("")
+        # the robot the sliders act on removed: they act on all robots again, and say so
+        panel.edit_robot.value = "k_pel 0.45"
+        press(scene.get_by_role("button", name="Remove robot"))
+        wait_until(lambda: session.intent.methods == ("mpc", "k 0.35"), "the robot removed")
+        assert panel.target.value == "all robots"
+        said = scene.get_by_text("k_pel 0.45 was removed. The sliders", exact=False)
+        wait_until(lambda: said.count() >= 1, "the note under 'Sliders act on'")
+        scroll_into_view(said.first)
+        screenshot(page, "robots_removed.png")
         page.context.close()
     assert tool.errors == [], tool.errors[:3]

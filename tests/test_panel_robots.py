@@ -66,7 +66,10 @@ def _draw(view, clock=[0.0]) -> None:  # noqa: B006 (a clock that moves on betwe
 
 
 def _press(panel, text: str = "", label: str = "", name: str = "mpc") -> None:
-    panel.add_strategy.value, panel.add_settings.value, panel.add_label.value = name, text, label
+    from pelvic_walk.core.methods import METHOD_INFO
+
+    title = METHOD_INFO[name].title  # the dropdown shows the strategies' titles
+    panel.add_strategy.value, panel.add_settings.value, panel.add_label.value = title, text, label
     panel._add_robot()
 
 
@@ -79,7 +82,10 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     assert intent.methods == ("fixed", "mpc", "short horizon")
     short = intent.robot("short horizon")
     assert (short.strategy, short.overrides) == ("mpc", (("com.horizon", 0.8),))
-    assert panel.compare_note.content == ""
+    assert panel.compare_note.content == (
+        "Added **short horizon**; all robots restarted together, on one clock."
+    )
+    assert panel.add_strategy.options == ("fixed pelvis", "redundancy", "pelvic MPC", "panel gain")
     assert intent.params_of("short horizon").com.horizon == 0.8
     assert intent.params_of("mpc").com.horizon == intent.params.com.horizon == 1.6
     _draw(view)
@@ -90,17 +96,20 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     assert tuple(panel.edit_robot.options) == names
     assert tuple(panel.push_robot.options) == names
 
-    # refusals: one line in the Compare folder, the robots unchanged
+    # refusals: one short line in the Compare folder, as the core says them, the robots
+    # unchanged; a short name read when one group has it
     for text, label, said in (
-        ("com.horizon=99", "far", "com.horizon"),
-        ("com.nonsense=1", "x", "unknown parameter"),
-        ("com.horizon=1.0", "short horizon", "share the label"),
+        ("com.horizon=99", "far", "com.horizon = 99.0 is above the maximum 3.0 s"),
+        ("com.nonsense=1", "x", "unknown parameter 'com.nonsense' (one of: walk.step_length, "),
+        ("com.horizon=1.0", "short horizon", "called 'short horizon': give one of them another"),
+        ("alpha=2", "x", "'alpha' is ambiguous: write com.alpha or pelvis.alpha"),
         ("", "a,b", "label"),
     ):
         _press(panel, text, label)
         note = panel.compare_note.content
-        assert note.startswith("**Not") and said in note and "\n" not in note, note
-        assert "Traceback" not in note
+        assert note.startswith("**Not added:** ") and said in note and "\n" not in note, note
+        assert "Traceback" not in note and "@LABEL" not in note and "&#x27;" not in note, note
+        assert len(note) < 200, "a long message pushes the form down the panel"
         assert sim.intent.methods == ("fixed", "mpc", "short horizon")
     _press(panel, "com.horizon=1.2", "H 1.2")
     _press(panel, "", "", name="redundancy")
@@ -114,6 +123,7 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     for key in ("H 1.2", "redundancy", "k 0.45"):
         panel.edit_robot.value = key
         panel._remove_robot()
+    assert panel.compare_note.content == "Removed **k 0.45**; the others restarted together."
     assert sim.intent.methods == ("fixed", "mpc", "short horizon")
     _draw(view)
     panel.target.value = "short horizon"
@@ -122,12 +132,25 @@ def test_robots_are_added_relabelled_removed_and_refusals_said_in_one_line(panel
     panel._relabel_robot()
     assert sim.intent.methods == ("fixed", "mpc", "H 0.8")
     assert sim.intent.robot("H 0.8").overrides == (("com.horizon", 0.8),)
-    assert panel.target.value == "H 0.8"
+    assert panel.target.value == "H 0.8" and panel.target_key() == "H 0.8"
+    assert "short horizon is now H 0.8" in panel.target_note.content
+    assert panel.compare_note.content.startswith("Relabelled **short horizon** as **H 0.8**")
     panel.edit_robot.value, panel.new_label.value = "H 0.8", "mpc"
     panel._relabel_robot()
-    assert panel.compare_note.content.startswith("**Not applied:**")
-    assert "share the label" in panel.compare_note.content
+    assert panel.compare_note.content.startswith("**Not relabelled:** two robots would both")
+    assert "another label" in panel.compare_note.content
     assert sim.intent.methods == ("fixed", "mpc", "H 0.8")
+    _draw(view)
+    assert panel.target.value == "H 0.8"
+
+    # the robot the sliders act on removed: they act on all robots again, and say why
+    panel.edit_robot.value = "H 0.8"
+    panel._remove_robot()
+    assert sim.intent.methods == ("fixed", "mpc")
+    assert panel.target.value == "all robots" and panel.target_key() is None
+    assert tuple(panel.target.options) == ("all robots", "fixed pelvis", "pelvic MPC")
+    assert panel.target_note.content.startswith("H 0.8 was removed. The sliders show and set")
+    _press(panel, "com.horizon=0.8", "H 0.8")  # back as it was for the next lines
 
     # a strategy's checkbox: the robots with settings keep them
     panel.method_boxes["fixed"].value = False
@@ -181,8 +204,13 @@ def test_sliders_act_on_the_robot_chosen_or_on_all(panel_view):
     panel.target.value = "short"
     panel._target_changed()
     sim.wait_applied(sim.set_robots(_robots("fixed", "mpc")))
+    shared = sim.intent.params
+    steps.value = 0.25  # moved before the view drew the change: not for every robot
+    assert sim.intent.params == shared, "a slider aimed at a robot gone set every robot's"
     _draw(view)
     assert panel.target.value == "all robots" and "every robot" in panel.target_note.content
+    assert panel.target_note.content.startswith("short is no longer shown. ")
+    assert steps.value == shared.walk.step_length
 
 
 def test_a_strategys_own_parameters_get_their_folder(panel_view):
@@ -270,6 +298,36 @@ def test_lesson_4_shows_two_mpcs_and_the_settings_that_differ(panel_view):
     assert isinstance(panel.learn.run, LessonRun)
 
 
+def test_lesson_4_table_while_a_robot_lies_fallen(panel_view):
+    """A short horizon fells the k_pel 0.45 robot (measured: H = 0.8 s falls at 1.4 s): while
+    it lies, its column keeps its settings, and its fall enters none of the maxima."""
+    from app.web.lessons import LESSONS
+
+    sim, view = panel_view
+    panel = view.panel
+    panel.learn.start(3)
+    sim.wait_applied(sim.update_params(target="k_pel 0.45", com={"horizon": 0.8}), 60)
+    try:
+        deadline = time.monotonic() + 120
+        f = sim.wait_frame(timeout=30)
+        while not (f is not None and f.robot("k_pel 0.45").fell):
+            assert time.monotonic() < deadline, "the robot with H = 0.8 s did not fall"
+            f = sim.wait_frame(f.seq if f else -1, timeout=30)
+            _draw(view)
+        for _ in range(5):  # a few frames of it lying there
+            f = sim.wait_frame(f.seq, timeout=30)
+            _draw(view)
+    finally:
+        sim.wait_applied(sim.pause(), 60)
+    _draw(view)
+    assert panel.learn.lesson is LESSONS[3]
+    table = panel.learn.live.content
+    assert "fell at t =" in table and "H=0.8 s, k_pel=0.45" in table, table
+    tally = panel.learn.run.tallies["k_pel 0.45"]
+    kappa, reach = tally.kappa_max, tally.reach_max
+    assert 1.0 < kappa < 1e3 and 0.5 < reach < 1.0, "the fall entered a maximum"
+
+
 def test_lesson_9_compares_beta_pel(panel_view):
     from app.web.lessons import LESSONS
 
@@ -279,22 +337,23 @@ def test_lesson_9_compares_beta_pel(panel_view):
     panel.learn.start(i)
     intent = sim.intent
     assert [r.strategy for r in intent.robots] == ["mpc", "mpc"]
-    assert intent.params_of("beta_pel 1e-2").pelvis.beta == 0.01
+    assert intent.params_of("beta_pel 0.01").pelvis.beta == 0.01
     assert intent.params_of("mpc").pelvis.beta == 1e-6
     try:
         deadline = time.monotonic() + 120
-        while "β_pel=0.01" not in panel.learn.live.content:
+        while "beta_pel=0.01" not in panel.learn.live.content:
             assert time.monotonic() < deadline, panel.learn.live.content
             sim.wait_frame(timeout=30)
             _draw(view)
     finally:
         sim.wait_applied(sim.pause(), 60)
     table = panel.learn.live.content
-    assert "β_pel=1e-06" in table and "beta_pel 1e-2" in table
+    assert "beta_pel=1e-6" in table and "beta_pel 0.01" in table
+    assert "β" not in table, "one notation: the sliders' (beta_pel)"
     # the scene's tags: the label says the setting already, the plain MPC's says its value
     tags = [str(x.handle.text).split("\n")[0] for x in view.scene.labels]
-    assert tags[0].startswith("● pelvic MPC · β_pel=1e-06"), tags
-    assert tags[1].startswith("○ beta_pel 1e-2 · β_pel=0.01"), tags
+    assert tags[0].startswith("● pelvic MPC · beta_pel=1e-6"), tags
+    assert tags[1].startswith("○ beta_pel 0.01") and "=0.01" not in tags[1], tags
 
 
 def _robots(*forms: str):

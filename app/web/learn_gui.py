@@ -12,9 +12,11 @@ numbers are computed on the display thread from the frames the views show and th
 the time" columns count from the last change (the lesson's start, a parameter, the robots
 shown, a restart asked for; not the session's own restart after a fall), so a change's effect
 can be read, and every view reads the same tallies (each frame is counted once, whichever
-view draws it first); the falls count from the last restart asked for (the lesson's). The
-lesson's text follows the state (``Lesson.now``), and when the numbers cannot follow the
-robots (changed by hand, waiting for a restart), the tab says so rather than freezing.
+view draws it first); a fall enters no maximum (from the second before it was seen until the
+restart), nor the last two steps' rows. The falls count from the last restart asked for (the
+lesson's). The lesson's text follows the state (``Lesson.now``), and when the numbers cannot
+follow the robots (changed by hand, waiting for a restart), the tab says so rather than
+freezing.
 """
 
 from __future__ import annotations
@@ -23,6 +25,7 @@ import html
 import math
 import threading
 import weakref
+from collections import deque
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -74,35 +77,75 @@ COLUMNS = {  # row label of each live number (Lesson.numbers)
 }
 
 
+# the rows a robot lying fallen (or stopped) still shows: what it is, not what it measures
+SHOWN_WHEN_DOWN = ("status", "falls", "step", "arms", "settings", "differ", "shares")
+
+
 def _num(v: float, digits: int = 0) -> str:
     if not math.isfinite(v):
         return "-"
     return f"{v:.1e}" if abs(v) >= 1e4 else f"{v:.{digits}f}"
 
 
+# [s] samples of the last second stay out of the "max since the last change" columns until
+# the robot is seen not to have fallen in that time: the fall test (pelvis below half its
+# height, torso over 30°) fires after the legs gave way, and the collapse before it is no
+# walking pose (measured at 0.40 m, k_pel 0.45: H = 1.2 s, legs straight from 1.90 s, fall at
+# 2.55 s; H = 0.8 s, from 1.02 s, fall at 1.40 s; kappa up to 1e9 in between)
+FALL_LOOKBACK_S = 1.0
+
+
 class _Tally:
-    """What one robot did since the last change, from the frames the view showed."""
+    """What one robot did since the last change, from the frames the view showed. The maxima
+    (reach, kappa, the IK's limits) leave out a fall: the frames from FALL_LOOKBACK_S before
+    it until the robot's restart."""
 
     def __init__(self) -> None:
         self.frames = 0
         self.status: dict[str, int] = {}
-        self.reach_max = 0.0
-        self.kappa_max = 0.0
+        self.reach_max = -math.inf  # (shown as "-" until a frame is counted)
+        self.kappa_max = -math.inf
         self.limits: dict[str, int] = {}  # the IK's active limits: frames each was seen in
+        # (clock, reach, kappa, limits) of the frames not yet counted in the maxima
+        self._pending: deque[tuple[float, float, float, list[str]]] = deque()
 
     def add(self, r: RobotFrame) -> None:
         if r.waiting or r.finished:
+            self._count(math.inf)  # a walk that ended without a fall: all of it counts
             return
         self.frames += 1
         self.status[r.status] = self.status.get(r.status, 0) + 1
-        if r.fell or r.error is not None:
-            return  # lying on the floor or stopped: its legs' reach and kappa say nothing
-        if np.all(np.isfinite(r.reach)):
-            self.reach_max = max(self.reach_max, float(np.max(r.reach)))
-        if math.isfinite(r.kappa_legs):
-            self.kappa_max = max(self.kappa_max, r.kappa_legs)
-        for name in ik_limits(r):
-            self.limits[name] = self.limits.get(name, 0) + 1
+        if r.error is not None:  # stopped: its legs' reach and kappa say nothing
+            self._count(math.inf)
+            return
+        if r.fell:  # lying on the floor, and in the collapse before the fall was seen
+            fell = r.fell_clock if r.fell_clock is not None else r.clock
+            self._count(fell - FALL_LOOKBACK_S)
+            self._pending.clear()
+            return
+        reach = float(np.max(r.reach)) if np.all(np.isfinite(r.reach)) else math.nan
+        self._pending.append((r.clock, reach, r.kappa_legs, ik_limits(r)))
+        self._count(r.clock - FALL_LOOKBACK_S)
+
+    def _count(self, before: float) -> None:
+        """Count the pending frames older than session clock ``before`` in the maxima."""
+        while self._pending and self._pending[0][0] < before:
+            _clock, reach, kappa, limits = self._pending.popleft()
+            if math.isfinite(reach):
+                self.reach_max = max(self.reach_max, reach)
+            if math.isfinite(kappa):
+                self.kappa_max = max(self.kappa_max, kappa)
+            for name in limits:
+                self.limits[name] = self.limits.get(name, 0) + 1
+
+
+def this_walk(rows: np.ndarray) -> np.ndarray:
+    """The plot rows of a robot's walk in progress: from its newest restart (its own time
+    starts again), without those it lay fallen (the fall's poses are no walk)."""
+    back = np.flatnonzero(np.diff(rows[:, COL["t"]]) < 0)
+    if back.size:
+        rows = rows[back[-1] + 1 :]
+    return rows[rows[:, COL["fell"]] != 1.0]
 
 
 def ik_limits(r: RobotFrame) -> list[str]:
@@ -352,20 +395,15 @@ class LearnTab:
 
     def _cell(self, key: str, r: RobotFrame, rows: np.ndarray | None) -> str:
         tally = (self.run.tallies.get(r.method) if self.run else None) or _Tally()
-        recent = rows if rows is not None and len(rows) else np.full((1, len(COL)), np.nan)
+        recent = this_walk(rows) if rows is not None else rows
+        if recent is None or not len(recent):
+            recent = np.full((1, len(COL)), np.nan)
 
         def col(name: str) -> np.ndarray:
             v = recent[:, COL[name]]
             return v[np.isfinite(v)]
 
-        if (r.fell or r.error is not None) and key not in (
-            "status",
-            "falls",
-            "step",
-            "arms",
-            "settings",
-            "shares",
-        ):
+        if (r.fell or r.error is not None) and key not in SHOWN_WHEN_DOWN:
             return "-"  # lying on the floor or stopped: its measurements say nothing of a walk
         if key == "status":
             if r.fell and r.fell_clock is not None:

@@ -134,14 +134,19 @@ class Lesson:
 #   k_pel 0.25 (default): success 10/10, waist max 25.1 deg, kappa max 44.4;
 #   k_pel 0.45: success 10/10, waist max 39.7 deg, kappa max 33.4;
 #   --horizon 1.2: fell at 2.56 s; --horizon 1.0: fell at 1.57 s; --horizon 0.8: fell at 1.40 s;
-#   k_pel 0.45 with --horizon 1.2: fell at 2.55 s; with --horizon 0.8: fell at 1.39 s;
-#   --pelvis-beta 0.01: success 10/10, waist max 26.3 deg, kappa max 53.8.
+#   k_pel 0.45 with --horizon 1.2: fell at 2.55 s; with --horizon 0.8: fell at 1.39 s.
 _K: dict[str, Any] = {
     "waist": (39.7, 25.1),
     "kappa": (33.4, 44.4),
     "falls": ((1.2, 2.55), (0.8, 1.39)),  # k_pel 0.45
 }
-_B = {"waist": (25.1, 26.3)}
+# Lesson 9's two, as the live table reads them (the last two steps, once walking), measured
+# with `pelvic-walk simulate --method mpc --step-length 0.4 --steps 20 --set pelvis.beta=B
+# --csv x.csv`, the waist angle and kappa_legs over steps 4-15 (the summary's "waist max",
+# 25.1 and 26.3 deg, is the first step's start-up):
+#   B = 1e-6 (default): waist -24.5 to +24.5 deg, kappa max 46.3;
+#   B = 0.01: waist -22.3 to +22.3 deg, kappa max 59.7. The live table shows the same.
+_B = {"waist": (24.5, 22.3), "kappa": (46, 60)}
 
 _F, _M = CLEAN_LIMIT_M[FIXED], CLEAN_LIMIT_M[MPC]
 _PF, _PM = PAPER_LIMIT_M[FIXED], PAPER_LIMIT_M[MPC]
@@ -229,7 +234,9 @@ LESSONS: tuple[Lesson, ...] = (
         f"within its first steps (measured: H = {_K['falls'][0][0]:g} s falls at "
         f"{_K['falls'][0][1]:.1f} s, {_K['falls'][1][0]:g} s at {_K['falls'][1][1]:.1f} s), "
         f"while the other keeps its 1.6 s; {FALL_HOLD_S:g} s after a fall both restart "
-        "together. <i>Sliders act on: all robots</i> gives both the same value again.",
+        "together. Choosing <i>Sliders act on: all robots</i> changes nothing by itself; the "
+        "next slider you move then sets its value for both robots (a robot's own value of "
+        "that slider is dropped).",
         ("31", "37"),
         ("differ", "settings", "waist", "reach", "kappa_legs", "status", "falls"),
         robot_forms=("mpc", "mpc,pelvis.k_pel=0.45@k_pel 0.45"),
@@ -322,18 +329,22 @@ LESSONS: tuple[Lesson, ...] = (
         (MPC,),
         "top",
         "Two MPC robots alike but for <b>beta_pel</b>, the weight on the pelvis's yaw "
-        "acceleration in the pelvic MPC's cost (eq. 36): 1e-6 (the default) and 1e-2 (the "
+        "acceleration in the pelvic MPC's cost (eq. 36): 1e-6 (the default) and 0.01 (the "
         "hollow marker). With a small beta_pel the optimised angle (eq. 37) lies on the "
-        "reference: the MPC's own plan is not seen. Raised, the acceleration costs and the plan "
-        "smooths the reference: open the <b>Inspect</b> tab, choose each robot in its "
+        "reference: in the Inspect tab the plan is drawn right on top of the reference. "
+        "Raised, the acceleration costs and the plan smooths the reference: open the "
+        "<b>Inspect</b> tab, choose each robot in its "
         f"<i>Robot</i> list and compare the {_PREDICTED} plan with the {_REFERENCE} dashed "
         "reference; the table's <i>MPC angle</i> row and the peak change of the waist rate "
-        f"say it in numbers. Both walk at 0.40 m (measured: waist {_B['waist'][0]:.0f}° and "
-        f"{_B['waist'][1]:.0f}° at most). Move the <b>beta_pel</b> slider (folder <i>Pelvic "
-        "MPC</i>) with <i>Sliders act on</i> set to one robot to try other values beside it.",
+        "say it in numbers. Both walk at 0.40 m (measured: the waist turns about "
+        f"±{_B['waist'][0]:.1f}° and ±{_B['waist'][1]:.1f}°). The smoother plan turns the "
+        "pelvis less, so the legs reach further and their kappa is higher (about "
+        f"{_B['kappa'][1]} against {_B['kappa'][0]} at most). Move the <b>beta_pel</b> slider "
+        "(folder <i>Pelvic MPC</i>) with <i>Sliders act on</i> set to one robot to try other "
+        "values beside it.",
         ("37",),
         ("differ", "plan", "waist", "rate", "jerk", "kappa_legs", "status"),
-        robot_forms=("mpc", "mpc,pelvis.beta=0.01@beta_pel 1e-2"),
+        robot_forms=("mpc", "mpc,pelvis.beta=0.01@beta_pel 0.01"),
     ),
 )
 

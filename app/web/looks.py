@@ -18,6 +18,7 @@ robots side by side each say what they run.
 from __future__ import annotations
 
 import functools
+import re
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -30,15 +31,13 @@ HOLLOW = {"■": "□", "▲": "△", "●": "○", "◆": "◇", "★": "☆", 
 SUPERSCRIPT = str.maketrans("0123456789", "⁰¹²³⁴⁵⁶⁷⁸⁹")
 # dash patterns of the second, third... robot of one strategy: unlike every strategy's own
 OTHER_DASHES: tuple[tuple[float, ...], ...] = ((6.0, 2.0), (1.0, 2.0), (14.0, 3.0, 1.0, 3.0))
-# short names of parameters a comparison names often (the others: their field's name)
+# short names of parameters a comparison names often (the others: their field's name), as
+# the sliders' labels spell them (beta_pel, not β_pel: one notation on the page)
 SHORT = {
     "com.horizon": "H",
     "pelvis.k_pel": "k_pel",
-    "pelvis.alpha": "α_pel",
-    "pelvis.beta": "β_pel",
-    "com.alpha": "α",
-    "com.beta": "β",
-    "com.gamma": "γ",
+    "pelvis.alpha": "alpha_pel",
+    "pelvis.beta": "beta_pel",
     "walk.step_length": "step",
     "walk.step_time": "T_step",
 }
@@ -139,7 +138,12 @@ def _parts(dotted: str, value: Any) -> tuple[str, str]:
     name = SHORT.get(dotted, dotted.partition(".")[2])
     if isinstance(value, bool):
         return name, "on" if value else "off"
-    return name, f"{value:g}" if isinstance(value, float) else str(value)
+    return name, number_text(value) if isinstance(value, float) else str(value)
+
+
+def number_text(value: float) -> str:
+    """A value as the lessons write it: ``0.01``, ``1e-6`` (not ``1e-06``)."""
+    return re.sub(r"e([+-])0*(\d)", lambda m: f"e{m.group(1).strip('+')}{m.group(2)}", f"{value:g}")
 
 
 def said_by(label: str, dotted: str, value: Any) -> bool:

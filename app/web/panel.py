@@ -32,6 +32,7 @@ from __future__ import annotations
 
 import html
 import math
+import re
 import threading
 import time
 from typing import TYPE_CHECKING, Any
@@ -90,6 +91,13 @@ A11Y_STYLE = (
 )
 MAX_SLIDER_POSITIONS = 2000  # above this many steps a number box replaces a linear slider
 ALL_ROBOTS = "all robots"  # the sliders' target: the shared value of every robot
+SETTINGS_EXAMPLE = "com.horizon=0.8, pelvis.k_pel=0.45"
+SETTINGS_HINT = (
+    f"Its own settings, e.g. {SETTINGS_EXAMPLE}: NAME=VALUE, comma-separated. A NAME is "
+    "GROUP.NAME as in the Controls' folders ("
+    + ", ".join(f"{g}: {t}" for g, t in GROUP_TITLES.items())
+    + "), or the name alone when one group has it (k_pel). Empty: the shared values."
+)
 PUSH_DIRECTIONS = {
     "left (+y)": (0.0, 1.0),
     "right (-y)": (0.0, -1.0),
@@ -114,17 +122,52 @@ def _hint(meta: dict[str, Any]) -> str:
     return f"Acts {when}{paper}{extra}."
 
 
-def target_note(target: str) -> str:
-    """What the sliders act on, in words (under the "Sliders act on" dropdown)."""
+def target_note(target: str, why: str = "") -> str:
+    """What the sliders act on, in words (under the "Sliders act on" dropdown), after ``why``
+    they changed if they did not change by hand ("k_pel 0.45 was removed")."""
+    said = f"{_md(why)}. " if why else ""
     if target == ALL_ROBOTS:
         return (
-            "The sliders show and set the value **every robot** shares (a robot's own "
+            f"{said}The sliders show and set the value **every robot** shares (a robot's own "
             "setting of a slider you move is dropped)."
         )
     return (
-        f"The sliders show and set **{html.escape(target)}**'s own values only; the other "
+        f"{said}The sliders show and set **{_md(target)}**'s own values only; the other "
         "robots keep theirs."
     )
+
+
+def _md(text: str) -> str:
+    """Text as it comes, safe in a markdown element (no HTML; quotes kept as they are)."""
+    return html.escape(str(text), quote=False)
+
+
+NOTE_CHARS = 160  # a message in the Compare folder: about three lines of the panel
+
+
+def short_message(text: str) -> str:
+    """A refusal as the Compare folder shows it: its first sentence, a long list in it cut
+    to its first two items ("(one of: walk.step_length, walk.step_time, ...)"), at most
+    :data:`NOTE_CHARS` characters; a long message would push the form down the panel."""
+    first = re.split(r"(?<=[.!?])\s+(?=[A-Z])", str(text).strip(), maxsplit=1)[0]
+
+    def cut(m: re.Match[str]) -> str:
+        items = m.group(2).split(", ")
+        return m.group(0) if len(items) <= 3 else f"({m.group(1)}{', '.join(items[:2])}, ...)"
+
+    first = re.sub(r"\(([\w ]+: )?([^()]*)\)", cut, first)
+    return first if len(first) <= NOTE_CHARS else first[: NOTE_CHARS - 3].rstrip() + "..."
+
+
+def strategy_titles() -> tuple[str, ...]:
+    """The strategies a robot may run, by their titles ("pelvic MPC"), in the registry's
+    order (the Add form's dropdown; :func:`strategy_of` maps a title back)."""
+    return tuple(METHOD_INFO[n].title for n in strategy.names())
+
+
+def strategy_of(title: str) -> str:
+    """The strategy's name of a title :func:`strategy_titles` shows (a name as it is)."""
+    return next((n for n in strategy.names() if METHOD_INFO[n].title == title), title)
 
 
 def robot_names(shown: tuple[Robot, ...]) -> tuple[str, ...]:
@@ -176,6 +219,7 @@ class ControlPanel:
         self.read_only = bool(getattr(view, "read_only", False))
         self.writers: list[Any] = []  # the controls that change the session
         self._message: str | None = None  # a one-off message in the status area
+        self._target: str | None = None  # the key of the robot the sliders act on (None: all)
         self._message_at = -math.inf  # time.monotonic() when it was said (shown MESSAGE_S)
         self._status_time = -math.inf
         gui.main_panel.dock_right()  # docked, not floating over the scene (viser's default)
@@ -355,20 +399,20 @@ class ControlPanel:
         self.robot_list = gui.add_html(robots_html(intent.robots))
         self.compare_note = gui.add_markdown("")
         with gui.add_folder("Add, relabel or remove a robot", expand_by_default=False):
-            gui.add_markdown("**Add a robot** (two may run one strategy with different settings):")
+            gui.add_markdown(
+                "**Add a robot** (two may run one strategy with different settings). "
+                f"Settings, for example: `{SETTINGS_EXAMPLE}`"
+            )
             self.add_strategy = self.writer(
                 gui.add_dropdown(
-                    "Strategy", strategy.names(), initial_value=strategy.MPC, hint="What it runs"
+                    "Strategy",
+                    strategy_titles(),
+                    initial_value=METHOD_INFO[strategy.MPC].title,
+                    hint="What it runs",
                 )
             )
-            self.add_settings = self.writer(
-                gui.add_text(
-                    "Settings",
-                    "",
-                    hint="Its own settings, e.g. com.horizon=0.8, pelvis.k_pel=0.45 "
-                    "(GROUP.NAME=VALUE, comma-separated; empty: the shared ones)",
-                )
-            )
+            # (viser's text box has no placeholder: the example is said above it)
+            self.add_settings = self.writer(gui.add_text("Settings", "", hint=SETTINGS_HINT))
             self.add_label = self.writer(
                 gui.add_text("Label", "", hint="Its name on the scene, plots and tables (optional)")
             )
@@ -445,6 +489,9 @@ class ControlPanel:
         if log:
             value = float(f"{value:.3g}")
         target = self.target_key()
+        if target is None and self._target is not None:  # its robot went (not drawn yet)
+            self._say("**Not applied:** the robot the sliders acted on is no longer shown.")
+            return
         if self.shown_params().value(f"{group}.{name}") == value:
             return
         self._reflected.pop((group, name), None)  # shown as the intent takes it (rounded)
@@ -454,8 +501,35 @@ class ControlPanel:
             self._say(f"**Not applied:** {html.escape(str(exc))}")
 
     def target_key(self) -> str | None:
-        """The robot the sliders act on (its key), or None: every robot."""
-        return self.key_of(self.target.value)
+        """The robot the sliders act on (its key), or None: every robot (also when that
+        robot is no longer shown: the dropdown follows at the next draw)."""
+        shown = {r.key for r in self.session.intent.robots}
+        return self._target if self._target in shown else None
+
+    def _aim(self, key: str | None, shown: tuple[Robot, ...], why: str = "") -> None:
+        """Point the sliders at robot ``key`` (None: every robot) among ``shown``: the
+        dropdown's options and text, the note under it (after ``why``, when the robots'
+        change moved it), and the sliders' values."""
+        names = robot_names(shown)
+        self._target = key if key in {r.key for r in shown} else None
+        name = (
+            ALL_ROBOTS
+            if self._target is None
+            else names[[r.key for r in shown].index(self._target)]
+        )
+        was, self._local.reflecting = getattr(self._local, "reflecting", False), True
+        try:
+            options = (ALL_ROBOTS, *names)
+            if tuple(self.target.options) != options:
+                self.target.options = options
+            if self.target.value != name:
+                self.target.value = name
+            self.target_note.content = target_note(name, why)
+            for control in self.controls:
+                self._reflected.pop(control, None)
+            self._reflect_params(self.shown_params())
+        finally:
+            self._local.reflecting = was
 
     def key_of(self, name: str) -> str | None:
         """The key of the robot a dropdown names ``name`` (None: no such robot shown)."""
@@ -471,16 +545,9 @@ class ControlPanel:
     def _target_changed(self) -> None:
         if getattr(self._local, "reflecting", False):
             return
-        self.target_note.content = target_note(self.target.value)
         # the sliders move to the values of what they act on now (the view draws again only
         # when the session changes: a paused one may not)
-        self._local.reflecting = True
-        try:
-            for key in self.controls:
-                self._reflected.pop(key, None)
-            self._reflect_params(self.shown_params())
-        finally:
-            self._local.reflecting = False
+        self._aim(self.key_of(self.target.value), self.session.intent.robots)
 
     def _methods_changed(self) -> None:
         if self.guarded():
@@ -497,62 +564,94 @@ class ControlPanel:
         else:  # robots with settings keep them; a strategy ticked joins them
             self._set_robots(kept + added)
 
-    def _set_robots(self, shown: list[Robot] | None, methods: list[str] | None = None) -> bool:
+    def _set_robots(
+        self,
+        shown: list[Robot] | None,
+        methods: list[str] | None = None,
+        refused: str = "Not applied",
+    ) -> bool:
         """Show these robots (or one per strategy of ``methods``); a refusal is said in one
-        line in the Compare folder (the session keeps its robots)."""
+        line in the Compare folder, after ``refused`` (the session keeps its robots)."""
         try:
             if shown is None:
                 self.session.set_methods(methods or [])
             else:
                 self.session.set_robots(shown)
         except (ValueError, PoolFull) as exc:
-            self.compare_note.content = f"**Not applied:** {html.escape(str(exc))}"
+            self._refused(refused, exc)
             self._reflected_version = -1  # the checkboxes back to the robots shown
             self._reflected.clear()
             return False
         self.compare_note.content = ""
         return True
 
+    def _refused(self, refused: str, exc: Exception) -> None:
+        self.compare_note.content = f"**{refused}:** {_md(short_message(str(exc)))}"
+
+    def _title(self, key: str, shown: tuple[Robot, ...] | None = None) -> str:
+        """A robot's name as the dropdowns show it (among ``shown``: the robots in force)."""
+        shown = self.session.intent.robots if shown is None else shown
+        return dict(zip((r.key for r in shown), robot_names(shown), strict=True)).get(key, key)
+
     def _add_robot(self) -> None:
         if self.guarded():
             return
         settings = self.add_settings.value.strip().strip(",")
+        name = strategy_of(self.add_strategy.value)
         try:
-            parsed = robots_.parse(",".join(x for x in (self.add_strategy.value, settings) if x))
+            parsed = robots_.parse(",".join(x for x in (name, settings) if x))
             new = robots_.make(parsed.strategy, parsed.overrides, self.add_label.value)
         except ValueError as exc:
-            self.compare_note.content = f"**Not added:** {html.escape(str(exc))}"
+            self._refused("Not added", exc)
             return
-        if self._set_robots([*self.session.intent.robots, new]):
+        shown = [*self.session.intent.robots, new]
+        if self._set_robots(shown, refused="Not added"):
             self.add_label.value = ""
             self.add_settings.value = ""
+            self.compare_note.content = (
+                f"Added **{_md(self._title(new.key, tuple(shown)))}**; all robots restarted "
+                "together, on one clock."
+            )
 
     def _remove_robot(self) -> None:
         if self.guarded():
             return
         key = self.key_of(self.edit_robot.value)
-        self._set_robots([r for r in self.session.intent.robots if r.key != key])
+        if key is None:
+            self.compare_note.content = "**Not removed:** choose a robot shown."
+            return
+        title = self._title(key)
+        shown = [r for r in self.session.intent.robots if r.key != key]
+        if self._set_robots(shown, refused="Not removed"):
+            self.compare_note.content = f"Removed **{_md(title)}**; the others restarted together."
+            if self._target == key:  # the sliders act on every robot again, and say so
+                self._aim(None, tuple(shown), f"{title} was removed")
 
     def _relabel_robot(self) -> None:
         if self.guarded():
             return
         key, label = self.key_of(self.edit_robot.value), self.new_label.value.strip()
-        aimed = key is not None and self.target_key() == key
         try:
-            robot = self.session.intent.robot(str(key))
+            if key is None:
+                raise ValueError("choose a robot shown")
+            robot = self.session.intent.robot(key)
             if not label:
                 raise ValueError("type the new label first")
             new = robots_.make(robot.strategy, robot.overrides, label)
         except ValueError as exc:
-            self.compare_note.content = f"**Not relabelled:** {html.escape(str(exc))}"
+            self._refused("Not relabelled", exc)
             return
+        title = self._title(key)
         shown = [new if r.key == key else r for r in self.session.intent.robots]
-        if self._set_robots(shown):
+        if self._set_robots(shown, refused="Not relabelled"):
             self.new_label.value = ""
-            if aimed:  # the sliders keep acting on the same robot
-                names = robot_names(tuple(shown))
-                self.target.options = (ALL_ROBOTS, *names)
-                self.target.value = names[shown.index(new)]
+            new_title = self._title(new.key, tuple(shown))
+            self.compare_note.content = (
+                f"Relabelled **{_md(title)}** as **{_md(new_title)}**; all robots restarted "
+                "together."
+            )
+            if self._target == key:  # the sliders keep acting on the same robot
+                self._aim(new.key, tuple(shown), f"{title} is now {new_title}")
 
     def _speed_changed(self) -> None:
         if self.guarded() or self.speed.value == self.session.intent.speed:
@@ -674,15 +773,14 @@ class ControlPanel:
 
     def _reflect_robots(self, intent: Any) -> None:
         """The robots shown: their list, the dropdowns naming them, the own-parameter
-        folders of their strategies; the sliders' target falls back to every robot when its
-        robot is gone."""
+        folders of their strategies. The sliders' target is a robot's key, not the text its
+        dropdown showed: when that robot is gone (removed or relabelled elsewhere: another
+        view, the API), they act on every robot again and the note says why."""
         keys = robot_names(intent.robots)
-        options = (ALL_ROBOTS, *keys)
-        if tuple(self.target.options) != options:
-            value = self.target.value
-            self.target.options = options
-            self.target.value = value if value in options else ALL_ROBOTS
-            self.target_note.content = target_note(self.target.value)
+        gone = self._target is not None and self.target_key() is None
+        if gone or tuple(self.target.options) != (ALL_ROBOTS, *keys):
+            why = f"{self.target.value} is no longer shown" if gone else ""
+            self._aim(self.target_key(), intent.robots, why)
         if tuple(self.edit_robot.options) != keys:
             self.edit_robot.options = keys
         content = robots_html(intent.robots)
