@@ -155,3 +155,30 @@ def serve_app():
     """``with serve_app(app) as base_url``: a real HTTP server for requests a TestClient cannot
     make (raw paths, another process such as schemathesis)."""
     return _served_in_thread
+
+
+@contextlib.contextmanager
+def only_builtin_strategies() -> Iterator[None]:
+    """The strategy registry as a fresh process has it (the paper's three), and back as it was
+    after: a test that counts colours, markers or names must not see the strategies other
+    tests of this process loaded (the examples take the palette's colours first)."""
+    from controller import params, strategy
+
+    saved = (
+        dict(strategy._REGISTRY),
+        dict(strategy._LOADED),
+        dict(params.OWN_PARAMS),
+        dict(params.ALIASES),
+    )
+    for name in [n for n in strategy.names() if not strategy.info(n).builtin]:
+        strategy.unregister(name)
+    try:
+        yield
+    finally:
+        for live, kept in zip(
+            (strategy._REGISTRY, strategy._LOADED, params.OWN_PARAMS, params.ALIASES),
+            saved,
+            strict=True,
+        ):
+            live.clear()
+            live.update(kept)  # type: ignore[attr-defined]

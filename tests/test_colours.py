@@ -23,6 +23,7 @@ from pathlib import Path
 import mujoco
 import numpy as np
 import pytest
+from conftest import only_builtin_strategies
 
 ROOT = Path(__file__).resolve().parents[1]
 # [CAM02-UCS delta E] every pair apart under each simulation: well beyond the 1-2 at which two
@@ -118,6 +119,8 @@ def drawn():
         def waist_rate(self, s):
             return None
 
+    isolated = only_builtin_strategies()
+    isolated.__enter__()
     for cls in (OwnA, OwnB):
         strategy.register(cls, builtin=False)
     server = viser.ViserServer(host="127.0.0.1", port=free_port(), verbose=False)
@@ -160,6 +163,7 @@ def drawn():
         server.stop()
         for cls in (OwnA, OwnB):
             strategy.unregister(cls.name)
+        isolated.__exit__(None, None, None)
 
 
 def test_the_scene_draws_each_robot_in_its_colour_and_the_overlays_in_theirs(drawn):
