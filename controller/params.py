@@ -278,17 +278,13 @@ class ControllerParams:
         parameter ``gain.k``; a name under a strategy for a paper parameter it owns
         (``mpc={"alpha": 2}``) sets the paper's (``pelvis.alpha``)."""
         changes: dict[str, Any] = {}
-        own = dict(self.own)
         values: dict[str, Any] = {}
         for name, value in groups.items():
-            if name in GROUPS and isinstance(value, dict):
-                values.update({f"{name}.{k}": v for k, v in value.items()})
-            elif isinstance(value, dict):  # a strategy's group
+            if isinstance(value, dict):  # a group of the paper's, or a strategy's own
                 values.update({f"{name}.{k}": v for k, v in value.items()})
             else:
                 changes[name] = value
-        if "own" in changes:
-            own = dict(changes.pop("own"))
+        own = dict(changes.pop("own", self.own))
         grouped: dict[str, dict[str, Any]] = {}
         for dotted, value in values.items():
             group, _, fname = resolve(dotted).partition(".")
@@ -313,6 +309,8 @@ class ControllerParams:
         """One parameter's value by name (``walk.step_length``, ``gain.k``, ``mpc.alpha``)."""
         group, _, fname = resolve(dotted).partition(".")
         if group in GROUPS:
+            if fname not in spec(getattr(self, group)):
+                raise ValueError(f"unknown parameter {dotted!r}")
             return getattr(getattr(self, group), fname)
         own = dict(self.own)
         if f"{group}.{fname}" in own:

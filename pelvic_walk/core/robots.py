@@ -67,13 +67,7 @@ def make(
     (ValueError with one line otherwise)."""
     strategy.info(name)
     items = overrides.items() if isinstance(overrides, dict) else overrides
-    checked: dict[str, Any] = {}
-    for dotted, value in items:
-        group, fname, meta = meta_of(full_name(str(dotted)))
-        checked[f"{group}.{fname}"] = _typed(meta, value)
-    for field in ("method",):
-        if field in checked:
-            raise ValueError("a robot's strategy is its NAME, not an override")
+    checked = dict(_setting(str(dotted), value) for dotted, value in items)
     robot = Robot(name, tuple(sorted(checked.items())), label.strip())
     params_of(ControllerParams(), robot)  # every value in range
     if not LABEL_PATTERN.match(robot.key):
@@ -123,32 +117,32 @@ def params_of(base: ControllerParams, robot: Robot) -> ControllerParams:
 
 
 def stored_name(dotted: str) -> str:
-    """A parameter's stored name (``mpc.alpha`` -> ``pelvis.alpha``); ValueError if unknown."""
-    group, fname, _meta = meta_of(dotted)
+    """A parameter's stored name (``mpc.alpha`` -> ``pelvis.alpha``, ``k_pel`` ->
+    ``pelvis.k_pel``); ValueError if unknown."""
+    group, fname, _meta = meta_of(full_name(dotted))
     return f"{group}.{fname}"
+
+
+def _setting(dotted: str, value: Any) -> tuple[str, Any]:
+    """One setting by its stored name, a whole number for a real parameter made a real (as
+    the shared parameters keep it: the API's JSON gives 25 for 25.0), so settings read and
+    compare alike however they were typed."""
+    group, fname, meta = meta_of(full_name(dotted))
+    if meta.get("type") == "float" and isinstance(value, int) and not isinstance(value, bool):
+        value = float(value)
+    return f"{group}.{fname}", value
 
 
 def with_settings(robot: Robot, values: dict[str, Any], base: ControllerParams) -> Robot:
     """``robot`` with these settings of its own (``"group.name"`` -> value), checked; a value
     equal to the shared one in ``base`` is no setting of its own (dropped)."""
-    mine = dict(robot.overrides)
-    for dotted, value in values.items():
-        group, fname, meta = meta_of(full_name(dotted))
-        mine[f"{group}.{fname}"] = _typed(meta, value)
+    mine = dict(robot.overrides) | dict(_setting(k, v) for k, v in values.items())
     kept = {k: v for k, v in mine.items() if not _same(base.value(k), v)}
     # its key stays (the label it had, or the one made from its settings before): a slider
     # moved for one robot changes its walk from the next tick, not which robot it is
     new = Robot(robot.strategy, tuple(sorted(kept.items())), robot.key)
     params_of(base, new)
     return new
-
-
-def _typed(meta: dict[str, Any], value: Any) -> Any:
-    """12 for a float parameter is 12.0 (as the shared parameters keep it): a robot's
-    settings then read and compare alike however they were typed."""
-    if meta.get("type") == "float" and isinstance(value, int) and not isinstance(value, bool):
-        return float(value)
-    return value
 
 
 def _same(a: Any, b: Any) -> bool:
@@ -186,18 +180,7 @@ def check_all(robots: Sequence[Robot]) -> tuple[Robot, ...]:
 
 
 def differing(robots: Sequence[Robot]) -> dict[str, dict[str, Any]]:
-    """Per robot (by key): the settings it has that not every other robot shares, with the
-    value (its override, or the session's shared value as ``None`` where another overrides)."""
-    out: dict[str, dict[str, Any]] = {}
-    keys = {k for r in robots for k, _ in r.overrides}
-    for r in robots:
-        mine = dict(r.overrides)
-        out[r.key] = {
-            k: mine.get(k)
-            for k in sorted(keys)
-            if len({dict(o.overrides).get(k, _SHARED) for o in robots}) > 1 and k in mine
-        }
-    return out
-
-
-_SHARED = object()
+    """Per robot (by key): its own settings that not every robot shown has, with that value
+    (a setting all of them share is no difference)."""
+    common = set.intersection(*(set(r.overrides) for r in robots)) if robots else set()
+    return {r.key: {k: v for k, v in r.overrides if (k, v) not in common} for r in robots}
