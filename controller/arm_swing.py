@@ -25,9 +25,11 @@ QP: P = omega1 a a' + (omega2 dt^2 + omega3) I, q = omega1 h_low a - omega2 dt (
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
-from controller.compiled import kernel
+from controller.compiled import daqp_call, kernel
 from controller.explain import ActiveConstraint, QpExplain, explain_qp, joint_bound
 from controller.ik import velocity_bounds
 from controller.params import ArmParams
@@ -109,6 +111,54 @@ def _bound_rows(n: int) -> np.ndarray:
     if n not in _BOUND_ROWS:
         _BOUND_ROWS[n] = frozen(np.eye(n))
     return _BOUND_ROWS[n]
+
+
+@kernel
+def _step(a_low_yaw, q_dot_low, a, q, q_up_init, limits, k, H, qp_vectors, x, *workspace):
+    """Eq. (43) built (:func:`_arm_cost`, :func:`velocity_bounds`) into DAQP's
+    ``H`` and ``qp_vectors`` (c, lo, hi) and solved into ``x`` (:func:`solve_arm_step`);
+    returns (status, flag). ``limits``: (q_min, q_max); ``k``: (omega1, omega2, omega3, dt,
+    qd_max)."""
+    P, c = _arm_cost(a_low_yaw, q_dot_low, a, q, q_up_init, k[0], k[1], k[2], k[3])
+    lo, hi = velocity_bounds(q, limits[0], limits[1], k[3], k[4])
+    H[:] = P
+    qp_vectors[0], qp_vectors[1], qp_vectors[2] = c, lo, hi
+    for v in H.ravel():
+        if not math.isfinite(v):  # as the solver checks a new P
+            return -1, 0
+    return daqp_call(c, lo, hi, x, *workspace)
+
+
+def solve_arm_step(
+    solver: QpSolver,
+    a_low_yaw: np.ndarray,
+    q_dot_low: np.ndarray,
+    a_up_yaw: np.ndarray,
+    q_up: np.ndarray,
+    q_up_init: np.ndarray,
+    limits: np.ndarray,
+    constants: np.ndarray,
+) -> tuple[np.ndarray, bool] | None:
+    """:func:`build_arm_qp` and :func:`solve_arm` in one compiled step (the same arithmetic),
+    or None when the solver runs no compiled step (then the caller makes those two calls).
+    ``limits``: (2, n) q_min, q_max; ``constants``: :func:`arm_constants`."""
+    n = a_up_yaw.shape[0]
+    A = _bound_rows(n)
+    args = solver.step_args(None, A)
+    if args is None:
+        return None
+    vectors, x, H = np.empty((3, n)), np.zeros(n), solver.hessian
+    status, flag = _step(
+        a_low_yaw, q_dot_low, a_up_yaw, q_up, q_up_init, limits, constants, H, vectors, x, *args
+    )
+    c, lo, hi = vectors
+    res = solver.settle(QP(H, c, A, lo, hi), x, status, flag, args[1])
+    return res.x, res.ok
+
+
+def arm_constants(params: ArmParams, dt: float, qd_max: float) -> np.ndarray:
+    """(5,) the constants of :func:`solve_arm_step`: omega1..3, dt [s], qd_max [rad/s]."""
+    return np.array([params.omega1, params.omega2, params.omega3, dt, qd_max])
 
 
 def solve_arm(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:

@@ -43,7 +43,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.compiled import kernel
+from controller.compiled import daqp_call, kernel
 from controller.explain import ActiveConstraint, QpExplain, ahead_text, explain_qp, side_of
 from controller.footsteps import FootstepPlan
 from controller.params import ComMpcParams, horizon_samples
@@ -91,14 +91,18 @@ class ComPlan:
 
 
 @kernel
-def _qp_vectors(zmp_from_state, q_zmp, q_dv, x0, zmp_ref, zmp_lo, zmp_hi):
-    """q, l, u (2N,) of eq. (18) for the state x0 (3, 2), per axis stacked [x; y]
-    (:meth:`ComMpc.build`)."""
+def _qp_vectors(zmp_from_state, q_zmp, q_dv, x0, zmp_ref, zmp_lo, zmp_hi, q, l, u):
+    """q, l, u (2N,) of eq. (18) for the state x0 (3, 2), per axis stacked [x; y], written
+    into ``q``, ``l``, ``u`` (:meth:`ComMpc.build`)."""
+    n = zmp_ref.shape[0]
     z_free = zmp_from_state @ x0  # (N, 2) ZMP with zero jerk, Pzs x0 (eq. 16-17)
-    q = q_zmp @ (z_free - zmp_ref) + q_dv @ x0  # alpha Pzu'(Pzs x0 - Zref) + beta Pdu'(Pds x0)
-    l = zmp_lo - z_free  # Z^min - Pzs x0 <= Pzu U
-    u = zmp_hi - z_free  # Pzu U <= Z^max - Pzs x0
-    return q.T.ravel(), l.T.ravel(), u.T.ravel()
+    qa = q_zmp @ (z_free - zmp_ref) + q_dv @ x0  # alpha Pzu'(Pzs x0 - Zref) + beta Pdu'(Pds x0)
+    la = zmp_lo - z_free  # Z^min - Pzs x0 <= Pzu U
+    ua = zmp_hi - z_free  # Pzu U <= Z^max - Pzs x0
+    for axis in range(2):
+        q[axis * n : (axis + 1) * n] = qa[:, axis]
+        l[axis * n : (axis + 1) * n] = la[:, axis]
+        u[axis * n : (axis + 1) * n] = ua[:, axis]
 
 
 @kernel
@@ -108,6 +112,22 @@ def _predicted(com_from_state, com_from_jerk, A_ctrl, B_ctrl, x0, jerk):
     com = com_from_state @ x0 + com_from_jerk @ jerk
     next_state = A_ctrl @ x0 + B_ctrl.reshape(3, 1) * jerk[0]
     return com, next_state
+
+
+@kernel
+def _step(maps, x0, zmp_ref, zmp_lo, zmp_hi, q, l, u, x, com, next_state, *workspace):
+    """Eq. (18) built (:func:`_qp_vectors`) and solved by DAQP on the solver's workspace
+    (:meth:`controller.qp.QpSolver.step_args`: ``workspace``), the horizon predicted from the
+    jerks U = x (2N,) (:func:`_predicted`), all written into the arrays given; returns DAQP's
+    (status, flag). ``maps``: (Pzs, q_zmp, q_dv, com_from_state, com_from_jerk, A, B)."""
+    zmp_from_state, q_zmp, q_dv, com_from_state, com_from_jerk, A_ctrl, B_ctrl = maps
+    _qp_vectors(zmp_from_state, q_zmp, q_dv, x0, zmp_ref, zmp_lo, zmp_hi, q, l, u)
+    status, flag = daqp_call(q, l, u, x, *workspace)
+    n = zmp_ref.shape[0]
+    com[:], next_state[:] = _predicted(
+        com_from_state, com_from_jerk, A_ctrl, B_ctrl, x0, x.reshape(2, n).T
+    )
+    return status, flag
 
 
 def lipm_discrete(T: float) -> tuple[np.ndarray, np.ndarray]:
@@ -203,6 +223,13 @@ class ComMpc:
         self._q_zmp = params.alpha * Pzu.T  # (N, N)
         self._q_dv = params.beta * Pdu.T @ self.dvel_from_state  # (N, 3)
         self.A_ctrl, self.B_ctrl = lipm_discrete(self.control_dt)
+        # the compiled step's constants and the QP it writes each tick (q, l, u in place)
+        self._maps = (
+            self.zmp_from_state, self._q_zmp, self._q_dv, self._com_from_state,
+            self._com_from_jerk, self.A_ctrl, self.B_ctrl,
+        )  # fmt: skip
+        z = np.zeros(2 * N)
+        self._qp = QP(self.hessian, z, self.constraint, z.copy(), z.copy())
         # (N,) k T_p [s], one object per set_params (the walker's plan table keys on it)
         self.sample_offsets = frozen(self.T * np.arange(1, N + 1))  # (N,) [s] k T_p
         if old_n is not None and old_n != N:
@@ -232,7 +259,9 @@ class ComMpc:
         Returns:
             The QP over U = [U_x; U_y] (2N jerks [m/s^3]).
         """
-        q, l, u = _qp_vectors(
+        n2 = 2 * self.N
+        q, l, u = np.empty(n2), np.empty(n2), np.empty(n2)
+        _qp_vectors(
             self.zmp_from_state,
             self._q_zmp,
             self._q_dv,
@@ -240,6 +269,9 @@ class ComMpc:
             np.asarray(zmp_ref, dtype=float),
             np.asarray(zmp_lo, dtype=float),
             np.asarray(zmp_hi, dtype=float),
+            q,
+            l,
+            u,
         )
         return QP(self.hessian, q, self.constraint, l, u)
 
@@ -276,22 +308,29 @@ class ComMpc:
                 ``params.zmp_margin``).
         """
         x0 = np.asarray(state, dtype=float)
-        qp = self.build(x0, ref, lo, hi)
-        self.last_qp = qp
-        res = self.solver.solve(qp)
         N = self.N
+        args = self.solver.step_args(self.hessian, self.constraint)
+        if args is not None:  # eq. (18) and (25-26) in one compiled step
+            qp = self._qp
+            x, com, next_state = np.zeros(2 * N), np.empty((N, 2)), np.empty((3, 2))
+            status, flag = _step(self._maps, x0, ref, lo, hi, qp.q, qp.l, qp.u, x, com, next_state, *args)
+            res = self.solver.settle(qp, x, status, flag, args[1])
+        else:
+            qp = self.build(x0, ref, lo, hi)
+            res = self.solver.solve(qp)
+        self.last_qp = qp
+        jerk = res.x.reshape(2, N).T
         if res.ok:
-            jerk = res.x.reshape(2, N).T
             self._prev_jerk, self._prev_t = jerk, float(t)
-        elif self._prev_jerk is not None:
+        elif self._prev_jerk is not None:  # the last optimal jerks, shifted (module docstring)
             shift = int(np.floor((t - self._prev_t) / self.T + 1e-9))
             jerk = self._prev_jerk[np.minimum(np.arange(N) + max(shift, 0), N - 1)]
         else:
             jerk = np.zeros((N, 2))
-        # eq. (25-26) and A x0 + B u0 over one control period
-        com, next_state = _predicted(
-            self._com_from_state, self._com_from_jerk, self.A_ctrl, self.B_ctrl, x0, jerk
-        )
+        if not res.ok or args is None:  # eq. (25-26) and A x0 + B u0 over one control period
+            com, next_state = _predicted(
+                self._com_from_state, self._com_from_jerk, self.A_ctrl, self.B_ctrl, x0, jerk
+            )
         return ComPlan(
             times,
             com,

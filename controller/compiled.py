@@ -24,12 +24,13 @@ a headless tick takes about 7 times the CPU (docs/DESIGN.md, "The compiled layer
   vectorised ``arctan`` differs from it in the last bit on some arguments).
 - ``error_model="numpy"``: a division by zero gives inf or NaN as in numpy (the QP solver's
   finiteness checks then see it) instead of raising.
-- A kernel calls only kernels of its own module: numba's cache notices a change of the
-  kernel's own file only, so a call into another module's kernel could keep running stale
-  code after that module changed.
+- A kernel may call kernels of other modules of ``controller/`` (a layer's compiled step
+  calls :func:`daqp_call`): numba's cache notices a change of the kernel's own file only,
+  so every kernel's cache is also keyed on every module of ``controller/`` (a change to
+  any of them compiles the kernels again in the next process).
 
 **DAQP.** :class:`DaqpWorkspace` solves QPs of one shape through DAQP's C functions, called
-from the kernel :func:`_daqp_call`: ``daqp.Model`` (DAQP's Python interface) wraps the same
+from the kernel :func:`daqp_call`: ``daqp.Model`` (DAQP's Python interface) wraps the same
 three functions, but its per-call conversions (an info dict, two copies) cost 2-3 us a call,
 more than DAQP's own work on these QPs. The binding is made at the first DAQP solver, not at
 import, and checked before use (:func:`daqp_binding`): the installed DAQP is the release
@@ -80,7 +81,33 @@ def kernel(fn: F) -> F:
     itself when the compiled layer is switched off (module docstring)."""
     if not JIT:
         return fn
-    return cast(F, numba.njit(cache=True, nogil=True, error_model="numpy")(fn))
+    compiled = numba.njit(cache=True, nogil=True, error_model="numpy")(fn)
+    _key_on_controller(compiled)
+    return cast(F, compiled)
+
+
+def _key_on_controller(compiled: Any) -> None:
+    """Key the kernel's cache on every module of ``controller/``: a kernel that calls
+    another module's (a layer's step calls :func:`daqp_call`) holds its compiled code,
+    which numba's cache, keyed on the kernel's own file only, would keep after that file
+    changed. If numba's cache has no such key (another release), the kernel is not cached
+    (compiled in every process: slower to start, never stale)."""
+    cache_file = getattr(getattr(compiled, "_cache", None), "_cache_file", None)
+    if cache_file is not None and hasattr(cache_file, "_source_stamp"):
+        cache_file._source_stamp = (cache_file._source_stamp, _CONTROLLER_STAMP)
+    else:
+        compiled._cache = numba.core.caching.NullCache()
+
+
+def _controller_stamp() -> tuple:
+    """(name, mtime, size) of every module of ``controller/``."""
+    folder = os.path.dirname(os.path.abspath(__file__))
+    names = sorted(n for n in os.listdir(folder) if n.endswith(".py"))
+    stats = [(n, os.stat(os.path.join(folder, n))) for n in names]
+    return tuple((n, st.st_mtime, st.st_size) for n, st in stats)
+
+
+_CONTROLLER_STAMP = _controller_stamp()
 
 
 # -- eq. (45)'s eigenvalues -------------------------------------------------------------------
@@ -245,7 +272,7 @@ _EXITFLAG = _DaqpResult.exitflag.offset // 4  # as an index of the result's int3
 _WORKSPACE_BYTES = ctypes.sizeof(_DaqpWorkspace)
 _GUARD_BYTES = 4 * _WORKSPACE_BYTES  # zeroed room after it, checked untouched (daqp_binding)
 
-# The C functions as :func:`_daqp_call` calls them: compiled, numba's declarations of
+# The C functions as :func:`daqp_call` calls them: compiled, numba's declarations of
 # symbols resolved when the binding is made; switched off, the ctypes functions themselves.
 if JIT:
     _c, _ptr = numba.types, numba.types.voidptr
@@ -410,17 +437,24 @@ def daqp_vectors(q, l, u, f, bu, bl, eq, sense, setup):
 
 
 @kernel
-def _daqp_call(q, l, u, out, mask, setup, f, bu, bl, eq, sense, x, work, problem, result, t):
-    """One DAQP solve on the workspace ``work`` (:meth:`DaqpWorkspace.solve`): the vectors
-    (:func:`daqp_vectors`), then setup_daqp (``setup``, on H and A as they are) or
-    daqp_update_ldp with ``mask`` (H, A) plus the vectors, plus the senses if an equality row
-    changed (else DAQP keeps its working set: the warm start); then daqp_solve and the
-    solution copied to ``out``. Returns (status, flag) as :meth:`DaqpWorkspace.solve`."""
+def daqp_call(q, l, u, out, mask, setup, buf, sense, eq, result, ptrs):
+    """One DAQP solve on a workspace (:meth:`DaqpWorkspace.solve`; a layer's compiled step
+    calls it with :attr:`DaqpWorkspace.args`): the vectors (:func:`daqp_vectors`), then
+    setup_daqp (``setup``, on H and A as they are) or daqp_update_ldp with ``mask`` (H, A)
+    plus the vectors, plus the senses if an equality row changed (else DAQP keeps its
+    working set: the warm start); then daqp_solve and the solution copied to ``out``.
+    ``buf`` holds f, x, bu, bl, the duals and the set-up time (:class:`DaqpWorkspace`),
+    ``ptrs`` the workspace's and the problem's addresses. Returns (status, flag) as
+    :meth:`DaqpWorkspace.solve`."""
+    n, m = q.shape[0], l.shape[0]
+    f, x = buf[:n], buf[n : 2 * n]
+    bu, bl = buf[2 * n : 2 * n + m], buf[2 * n + m : 2 * n + 2 * m]
     valid, changed = daqp_vectors(q, l, u, f, bu, bl, eq, sense, setup)
     if not valid:
         return -1, 0
+    work, problem = ptrs[0], ptrs[1]
     if setup:
-        flag = _setup_daqp(problem, work, t.ctypes.data)
+        flag = _setup_daqp(problem, work, buf[2 * n + 3 * m :].ctypes.data)
     else:
         mask |= UPDATE_F | UPDATE_BOUNDS
         if changed:
@@ -432,7 +466,7 @@ def _daqp_call(q, l, u, out, mask, setup, f, bu, bl, eq, sense, x, work, problem
     exitflag = result[_EXITFLAG]
     if exitflag < 1:
         return -3, exitflag
-    for i in range(x.shape[0]):
+    for i in range(n):
         if not math.isfinite(x[i]):
             return -3, exitflag
         out[i] = x[i]
@@ -450,17 +484,21 @@ class DaqpWorkspace:
     def __init__(self, m: int, n: int, binding: DaqpBinding | None):
         self.shape = (m, n)
         self.H, self.A = np.zeros((n, n)), np.zeros((m, n))
-        self.f, self.x = np.zeros(n), np.zeros(n)
-        self.bu, self.bl, self.lam = np.zeros(m), np.zeros(m), np.zeros(m)
+        # the vectors in one buffer (a kernel takes one argument for them): f, x (n), bu,
+        # bl, the duals (m) and DAQP's set-up time (1)
+        self.buf = np.zeros(2 * n + 3 * m + 1)
+        self.f, self.x = self.buf[:n], self.buf[n : 2 * n]
+        self.bu, self.bl = self.buf[2 * n : 2 * n + m], self.buf[2 * n + m : 2 * n + 2 * m]
+        self.lam = self.buf[2 * n + 2 * m : 2 * n + 3 * m]
         self.sense = np.zeros(m, dtype=np.intc)
         self.eq = np.zeros(m, dtype=np.bool_)  # which rows are equalities
+        self.args: tuple = ()  # daqp_call's workspace arguments (buf, sense, eq, result, ptrs)
         self._binding = binding
         if binding is None:
             self._model = daqp.Model()
             self._stats = (math.nan, -1)  # the last solve's objective and iterations
             self._solve_time = math.nan  # [s] the last solve's, as DAQP measured it
             return
-        self.setup_time = np.zeros(1)
         ptr = ctypes.c_void_p
         self._problem = _DaqpProblem(
             n, m, 0, *(ptr(a.ctypes.data) for a in (self.H, self.f, self.A, self.bu, self.bl)),
@@ -475,6 +513,8 @@ class DaqpWorkspace:
         if not self.work:
             raise MemoryError("DAQP workspace")
         self._finalizer = weakref.finalize(self, binding.release, self.work)
+        ptrs = np.array([self.work, self.problem], dtype=np.int64)
+        self.args = (self.buf, self.sense, self.eq, self.result, ptrs)
 
     def solve(
         self,
@@ -497,13 +537,15 @@ class DaqpWorkspace:
         if self._binding is None:
             return self._solve_model(q, l, u, out, new_H, new_A, setup)
         mask = (UPDATE_H if new_H else 0) | (UPDATE_A if new_A else 0)
-        status, flag = _daqp_call(
-            q, l, u, out, mask, setup, self.f, self.bu, self.bl, self.eq, self.sense, self.x,
-            self.work, self.problem, self.result, self.setup_time,
-        )  # fmt: skip
-        if status == -2 and setup:  # DAQP freed its own; settings as Model restores them
-            self._binding.lib.allocate_daqp_settings(self.work)
+        status, flag = daqp_call(q, l, u, out, mask, setup, *self.args)
+        self.failed(status, setup)
         return status, flag
+
+    def failed(self, status: int, setup: bool) -> None:
+        """After a solve's (status, setup): a failed set-up freed DAQP's own settings;
+        restore them as ``daqp.Model`` does (so the workspace can be released)."""
+        if status == -2 and setup and self._binding is not None:
+            self._binding.lib.allocate_daqp_settings(self.work)
 
     def _solve_model(self, q, l, u, out, new_H, new_A, setup) -> tuple[int, int]:
         """:meth:`solve` through ``daqp.Model``: the same C calls with the same arguments."""

@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from controller.compiled import kernel
+from controller.compiled import daqp_call, kernel
 from controller.explain import ActiveConstraint, QpExplain, explain_qp, joint_bound
 from controller.params import IkParams
 from controller.qp import QP, QpSolver, frozen
@@ -137,6 +137,90 @@ def build_ik(
         params.redundancy_weight,
     )
     return QP(P, c, BOUND_ROWS, lo, hi)
+
+
+@kernel
+def foot_targets(p_left, v_left, p_right, v_right, pelvis, v_pelvis):
+    """The feet's targets relative to the pelvis: positions (3,) and feed-forward twists (6,)
+    [linear; angular] (the feet do not turn), left and right, from their world positions and
+    velocities (3,) and the pelvis's."""
+    v_ff_l = np.zeros(6)
+    v_ff_l[:3] = v_left - v_pelvis
+    v_ff_r = np.zeros(6)
+    v_ff_r[:3] = v_right - v_pelvis
+    return p_left - pelvis, p_right - pelvis, v_ff_l, v_ff_r
+
+
+@kernel
+def _step(T_left, T_right, feet, pelvis, v_pelvis, JtJ, J, q, limits, k, waist_rate, H, qp_vectors, x, *ws):
+    """Eq. (39) for flat feet, built and solved in one compiled step (:func:`solve_ik_step`):
+    the feet's targets from row 1 of the plan's (p_left, v_left, p_right, v_right)
+    ``feet``, relative to the pelvis (``pelvis``, ``v_pelvis``), their twists
+    (:func:`_foot_twists`), the QP (:func:`_ik_qp` on J'J = ``JtJ``) written into DAQP's
+    ``H`` and ``qp_vectors`` (c, lo, hi), solved by DAQP into ``x``; returns (status, flag).
+    ``limits``: (q_min, q_max); ``k``: (foot gain, dt, speed limit, damping, weight)."""
+    p_left, v_left, p_right, v_right = feet
+    p_des_l, p_des_r, v_ff_l, v_ff_r = foot_targets(
+        p_left[1], v_left[1], p_right[1], v_right[1], pelvis, v_pelvis
+    )
+    v_des = _foot_twists(T_left, _FLAT, p_des_l, v_ff_l, T_right, _FLAT, p_des_r, v_ff_r, k[0])
+    P, c, lo, hi = _ik_qp(JtJ, J, v_des, q, limits[0], limits[1], k[1], k[2], k[3], waist_rate, k[4])
+    H[:] = P
+    qp_vectors[0], qp_vectors[1], qp_vectors[2] = c, lo, hi
+    for v in H.ravel():
+        if not math.isfinite(v):  # as the solver checks a new P
+            return -1, 0
+    return daqp_call(c, lo, hi, x, *ws)
+
+
+def solve_ik_step(
+    solver: QpSolver,
+    J_low: np.ndarray,
+    T_left: np.ndarray,
+    T_right: np.ndarray,
+    feet: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    pelvis: np.ndarray,
+    v_pelvis: np.ndarray,
+    q_low: np.ndarray,
+    limits: np.ndarray,
+    constants: np.ndarray,
+    waist_rate: float | None,
+) -> tuple[np.ndarray, bool] | None:
+    """The walker's IK of a tick: :func:`foot_targets`, :func:`flat_foot_velocity_command`,
+    :func:`build_ik` and :func:`solve_ik` in one compiled step (the same arithmetic), or None
+    when the solver runs no compiled step (then the caller makes those four calls).
+
+    Args:
+        J_low: (12, 13); T_left, T_right: (4, 4) the soles' poses in the pelvis frame.
+        feet: the plan's (p_left, v_left, p_right, v_right) rows, row 1 the next tick's.
+        pelvis, v_pelvis: (3,) the desired pelvis's position and velocity (world) [m, m/s].
+        q_low: (13,); limits: (2, 13) q_min, q_max [rad].
+        constants: (5,) foot gain, dt [s], joint speed limit [rad/s], damping, redundancy
+            weight (:func:`ik_constants`).
+        waist_rate: as :func:`build_ik`.
+    """
+    args = solver.step_args(None, BOUND_ROWS)
+    if args is None:
+        return None
+    vectors = np.empty((3, N_LOW))
+    x = np.zeros(N_LOW)
+    H = solver.hessian
+    # J'J by numpy (as build_ik): a symmetric product (BLAS syrk), exactly symmetric
+    status, flag = _step(
+        T_left, T_right, feet, pelvis, v_pelvis, J_low.T @ J_low, J_low, q_low, limits, constants,
+        waist_rate, H, vectors, x, *args,
+    )  # fmt: skip
+    c, lo, hi = vectors
+    res = solver.settle(QP(H, c, BOUND_ROWS, lo, hi), x, status, flag, args[1])
+    return res.x, res.ok
+
+
+def ik_constants(params: IkParams, dt: float) -> np.ndarray:
+    """(5,) the constants of :func:`solve_ik_step`: foot gain, dt, speed limit, damping,
+    redundancy weight."""
+    return np.array(
+        [params.foot_gain, dt, params.joint_speed_limit, params.damping, params.redundancy_weight]
+    )
 
 
 def solve_ik(qp: QP, solver: QpSolver) -> tuple[np.ndarray, bool]:

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from controller.compiled import kernel
+from controller.compiled import daqp_call, kernel
 from controller.explain import ActiveConstraint, QpExplain, ahead_text, explain_qp, side_of
 from controller.params import PelvisMpcParams
 from controller.qp import QP, QpSolver, frozen
@@ -98,6 +98,24 @@ def _inputs_and_rates(angles, free, M, PA_rate, PB_rate, x0):
     f, and the predicted rates theta_dot_1..N = P_A,rate x0 + P_B,rate U (eq. 35)."""
     u = M @ (angles - free)
     return u, PA_rate @ x0 + PB_rate @ u
+
+
+@kernel
+def _step(theta, theta_dot, theta_ref, maps, k, q, lo, hi, out, *workspace):
+    """Eq. (37) built (:func:`_qp_vectors`) and solved by DAQP on the solver's workspace
+    (``workspace``), the inputs and rates recovered (:func:`_inputs_and_rates`): ``out``
+    (4, N) gets the angles, rates, inputs and the reference. Returns DAQP's (status, flag)
+    and eq. (38)'s next angle and rate (valid when the status is 0).
+    ``maps``: (PA_ang, beta M'M, s M, M, PA_rate, PB_rate); ``k``: (alpha, angle limit,
+    s acc_limit, control dt)."""
+    PA_ang, bMtM, sM, M, PA_rate, PB_rate = maps
+    x0 = np.array([theta, theta_dot])
+    out[3] = theta_ref
+    free, q[:], lo[:], hi[:] = _qp_vectors(out[3], x0, PA_ang, k[0], bMtM, sM, k[1], k[2])
+    status, flag = daqp_call(q, lo, hi, out[0], *workspace)
+    out[2], out[1] = _inputs_and_rates(out[0], free, M, PA_rate, PB_rate, x0)
+    dt, u0 = k[3], out[2, 0]
+    return status, flag, theta + dt * theta_dot + 0.5 * dt * dt * u0, theta_dot + dt * u0
 
 
 class PelvisMpc:
@@ -159,6 +177,11 @@ class PelvisMpc:
         self._bMtM = b * self._MtM  # (N, N)
         self._sM = self._acc_scale * self._M  # (N, N)
         self._s_acc_limit = params.acc_limit * self._acc_scale
+        # the compiled step's constants and the QP it writes each tick (q, l, u in place)
+        self._maps = (self._PA_ang, self._bMtM, self._sM, self._M, self._PA_rate, self._PB_rate)
+        self._k = np.array([a, self._angle_limit, self._s_acc_limit, self.control_dt])
+        z = np.zeros(n)
+        self._qp = QP(self._P, z, self._Acon, np.zeros(2 * n), np.zeros(2 * n))
         if shape_changed:
             self.solver.reset()
 
@@ -190,10 +213,25 @@ class PelvisMpc:
 
     def solve(self, theta: float, theta_dot: float, theta_ref: np.ndarray) -> PelvisPlan:
         """Solve eq. (37) and integrate the first input over one control period (eq. 38)."""
-        ref = np.array(theta_ref, dtype=float).reshape(-1)  # a copy: the plan keeps it
+        n = self.n_samples
+        args = self.solver.step_args(self._P, self._Acon)
+        if args is not None and len(theta_ref) == n:  # eq. (37) and (38) in one compiled step
+            qp, out = self._qp, np.empty((4, n))
+            status, flag, next_angle, next_rate = _step(
+                float(theta), float(theta_dot), theta_ref, self._maps, self._k, qp.q, qp.l,
+                qp.u, out, *args,
+            )  # fmt: skip
+            res = self.solver.settle(qp, out[0], status, flag, args[1])
+            if res.ok:
+                angles, rates, u, ref = out
+                return PelvisPlan(angles, rates, u, ref, next_angle, next_rate, True)
+            ref = out[3]
+            free = self._PA_ang @ np.array([theta, theta_dot], dtype=float)
+        else:
+            ref = np.array(theta_ref, dtype=float).reshape(-1)  # a copy: the plan keeps it
+            free, qp = self._build(ref, np.array([theta, theta_dot], dtype=float))
+            res = self.solver.solve(qp)
         x0 = np.array([theta, theta_dot], dtype=float)
-        free, qp = self._build(ref, x0)
-        res = self.solver.solve(qp)
         if res.ok:
             angles = res.x  # the QP's variable (module docstring)
         else:  # the brake's angles (eq. 35's angle rows)

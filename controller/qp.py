@@ -40,7 +40,7 @@ import numpy as np
 import osqp
 import scipy.sparse as sp
 
-from controller.compiled import INF, DaqpWorkspace, daqp_binding
+from controller.compiled import INF, UPDATE_A, UPDATE_H, DaqpWorkspace, daqp_binding
 
 # numpy's reductions called directly (ndarray.sum / .min add a Python-level wrapper per call)
 _sum = np.add.reduce
@@ -165,6 +165,58 @@ class QpSolver:
         return np.array(res.x, dtype=float), status
 
     # -- DAQP ------------------------------------------------------------------------------
+    # False: every layer builds its QP and calls solve() (tests compare the two ways)
+    compiled_steps = True
+
+    def step_args(self, P: np.ndarray | None, A: np.ndarray) -> tuple | None:
+        """What a layer's compiled step hands :func:`controller.compiled.daqp_call` for a QP
+        with constraint matrix ``A`` and Hessian ``P``: ``(mask, setup, *workspace args)``,
+        P and A copied into DAQP's workspace (and checked) only when new, as :meth:`solve`
+        does; ``P`` None: the step writes the Hessian into :attr:`hessian` itself (and
+        checks it).
+        None when no compiled step runs (OSQP, ``daqp.Model``, ``compiled_steps`` off, a new
+        P or A that is not finite): the layer then builds its QP and calls :meth:`solve`.
+        :meth:`settle` records the step's solve."""
+        binding = self._binding
+        if binding is None or not self.compiled_steps:
+            return None
+        work = self._daqp
+        m, n = A.shape
+        setup = work is None or work.shape != (m, n)
+        # _same inlined (this runs four times a tick)
+        new_P = P is None or setup or P is not self._P_obj or P.flags.writeable
+        new_A = setup or A is not self._A_obj or A.flags.writeable
+        if (P is not None and new_P and not math.isfinite(_sum(P, None))) or (
+            new_A and not math.isfinite(_sum(A, None))
+        ):
+            return None
+        if setup:
+            work = self._daqp = DaqpWorkspace(m, n, binding)
+        assert work is not None
+        if new_P:
+            if P is not None:
+                work.H[...] = P
+            self._P_obj = P
+        if new_A:
+            work.A[...] = A
+            self._A_obj = A
+        mask = (UPDATE_H if new_P else 0) | (UPDATE_A if new_A else 0)
+        return (mask, setup, *work.args)
+
+    @property
+    def hessian(self) -> np.ndarray:
+        """DAQP's Hessian buffer, for a step that writes its own (after :meth:`step_args`)."""
+        assert self._daqp is not None
+        return self._daqp.H
+
+    def settle(self, qp: QP, x: np.ndarray, status: int, flag: int, setup: bool) -> QpResult:
+        """Record a compiled step's solve of ``qp`` (``x``, and ``status``, ``flag`` and
+        ``setup`` as :func:`controller.compiled.daqp_call` and :meth:`step_args` gave them)
+        as :meth:`solve` records its own; the same result, fallback and failure count."""
+        if status != 0 and self._daqp is not None:
+            self._daqp.failed(status, setup)
+        return self._finish(qp, x if status == 0 else None, _daqp_status(status, flag, setup))
+
     def _solve_daqp(self, qp: QP) -> tuple[np.ndarray | None, str]:
         """DAQP on the QP (:class:`controller.compiled.DaqpWorkspace`): P and A copied to the
         workspace (and checked) only when new, the vectors every call."""
@@ -192,13 +244,7 @@ class QpSolver:
             self._A_obj = A
         x = np.empty(n)
         status, flag = work.solve(q, l, u, x, new_P, new_A, setup)
-        if status == -1:
-            return None, _INVALID
-        if status == -2:
-            return None, f"daqp {'setup' if setup else 'update'} flag {flag}"
-        if status == -3:
-            return None, f"daqp exitflag {flag}"
-        return x, "solved"
+        return (x if status == 0 else None), _daqp_status(status, flag, setup)
 
     def solve(self, qp: QP) -> QpResult:
         """Solve; on failure return the previous solution (or zeros) with ok=False.
@@ -214,6 +260,10 @@ class QpSolver:
             x, status = self._solve_osqp(qp)
         else:
             x, status = None, _INVALID
+        return self._finish(qp, x, status)
+
+    def _finish(self, qp: QP, x: np.ndarray | None, status: str) -> QpResult:
+        """The result of a solve (``x`` None: failed), kept for an explanation on demand."""
         if x is None:
             self.failures += 1
             fallback = self.x_prev if self.x_prev is not None else np.zeros(qp.q.shape[0])
@@ -262,6 +312,17 @@ class QpSolver:
         ax = qp.A @ res.x
         tol = 1e-7 * (1.0 + np.abs(qp.u))
         return float(np.count_nonzero((np.abs(ax - qp.u) <= tol) | (np.abs(ax - qp.l) <= tol)))
+
+
+def _daqp_status(status: int, flag: int, setup: bool) -> str:
+    """The words for a DAQP solve's (status, flag) (:meth:`DaqpWorkspace.solve`)."""
+    if status == 0:
+        return "solved"
+    if status == -1:
+        return _INVALID
+    if status == -2:
+        return f"daqp {'setup' if setup else 'update'} flag {flag}"
+    return f"daqp exitflag {flag}"
 
 
 def _valid(qp: QP, P_known: np.ndarray | None, A_known: np.ndarray | None) -> bool:

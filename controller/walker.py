@@ -48,7 +48,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from controller.arm_swing import build_arm_qp, solve_arm, yaw_momentum
+from controller.arm_swing import (
+    arm_constants,
+    build_arm_qp,
+    solve_arm,
+    solve_arm_step,
+    yaw_momentum,
+)
 from controller.com_mpc import ComMpc, ComPlan
 from controller.compiled import kernel
 from controller.footsteps import (
@@ -59,7 +65,14 @@ from controller.footsteps import (
     TickSamples,
     plan_footsteps,
 )
-from controller.ik import build_ik, flat_foot_velocity_command, solve_ik
+from controller.ik import (
+    build_ik,
+    flat_foot_velocity_command,
+    foot_targets,
+    ik_constants,
+    solve_ik,
+    solve_ik_step,
+)
 from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
 from controller.params import ControllerParams
 from controller.pelvis_mpc import PelvisPlan
@@ -162,6 +175,10 @@ class Walker:
         self.backend = backend
         self.params = params.validated()
         self.dt = params.control_dt
+        self._ik_constants = ik_constants(self.params.ik, self.dt)
+        self._arm_constants = arm_constants(
+            self.params.arms, self.dt, self.params.ik.joint_speed_limit
+        )
         self.t = 0.0
         self.q_cmd = np.array(q_init, dtype=float)
         self.q_init = self.q_cmd.copy()
@@ -171,6 +188,8 @@ class Walker:
         self._q_min_low, self._q_max_low = kin.q_min[self.lower], kin.q_max[self.lower]
         self._q_min_arms, self._q_max_arms = kin.q_min[self.arms], kin.q_max[self.arms]
         self._q_init_arms = self.q_init[self.arms]
+        self._limits_low = np.array([self._q_min_low, self._q_max_low])  # (2, 13)
+        self._limits_arms = np.array([self._q_min_arms, self._q_max_arms])  # (2, 4)
         self.p_world_pelvis_des = np.array(p_world_pelvis_init, dtype=float)
         self.pelvis_height = float(self.p_world_pelvis_des[2])
 
@@ -212,6 +231,9 @@ class Walker:
             # another strategy: reset at this tick, from the waist rate the IK last commanded
             self.strategy = create(new.method, self.backend)
             self.ik_solver.reset()
+        if new.ik != old.ik or new.arms != old.arms:
+            self._ik_constants = ik_constants(new.ik, self.dt)
+            self._arm_constants = arm_constants(new.arms, self.dt, new.ik.joint_speed_limit)
         self.params = new
 
     @property
@@ -430,29 +452,28 @@ class Walker:
         """8. QP inverse kinematics (eq. 39-40) on the commanded state: q_dot_low (13,) toward
         the feet's targets at the next tick (row 1 of the plan's rows, relative to the pelvis),
         the waist pinned to ``waist_rate``; 0 (the last command held) if the QP failed."""
-        p = self.params
-        p_des_l, p_des_r, v_ff_l, v_ff_r = _foot_targets(
-            plan.p_left[1],
-            plan.v_left[1],
-            plan.p_right[1],
-            plan.v_right[1],
-            self.p_world_pelvis_des,
-            v_world_pelvis,
-        )
-        v_des = flat_foot_velocity_command(  # flat feet: desired poses given as positions
-            ks.T_pelvis_left_sole,
-            p_des_l,
-            v_ff_l,
-            ks.T_pelvis_right_sole,
-            p_des_r,
-            v_ff_r,
-            p.ik.foot_gain,
-        )
         q_low = self.q_cmd[:13]  # the lower joints (a view: q_cmd is replaced, never written)
-        qp = build_ik(
-            ks.J_low, v_des, q_low, self._q_min_low, self._q_max_low, p.ik, self.dt, waist_rate
-        )
-        q_dot_low, ok = solve_ik(qp, self.ik_solver)
+        feet = (plan.p_left, plan.v_left, plan.p_right, plan.v_right)
+        pelvis, T_left, T_right = self.p_world_pelvis_des, ks.T_pelvis_left_sole, ks.T_pelvis_right_sole
+        step = solve_ik_step(
+            self.ik_solver, ks.J_low, T_left, T_right, feet, pelvis, v_world_pelvis, q_low,
+            self._limits_low, self._ik_constants, waist_rate,
+        )  # fmt: skip
+        if step is not None:  # the four calls below in one compiled step
+            q_dot_low, ok = step
+        else:
+            p_des_l, p_des_r, v_ff_l, v_ff_r = foot_targets(
+                plan.p_left[1], plan.v_left[1], plan.p_right[1], plan.v_right[1], pelvis,
+                v_world_pelvis,
+            )  # fmt: skip
+            v_des = flat_foot_velocity_command(  # flat feet: desired poses given as positions
+                T_left, p_des_l, v_ff_l, T_right, p_des_r, v_ff_r, self.params.ik.foot_gain
+            )
+            qp = build_ik(
+                ks.J_low, v_des, q_low, self._q_min_low, self._q_max_low, self.params.ik,
+                self.dt, waist_rate,
+            )  # fmt: skip
+            q_dot_low, ok = solve_ik(qp, self.ik_solver)
         if not ok:
             q_dot_low = np.zeros(13)
         self._last_waist_rate = float(q_dot_low[0])
@@ -465,19 +486,19 @@ class Walker:
         p, arms = self.params, self.arms
         if not p.arms.enabled:
             return np.clip((self._q_init_arms - self.q_cmd[arms]) / 0.2, -1.0, 1.0), True
-        aqp = build_arm_qp(
-            ks.cmm_yaw_low,
-            q_dot_low,
-            ks.cmm_yaw_up,
-            self.q_cmd[arms],
-            self._q_init_arms,
-            self._q_min_arms,
-            self._q_max_arms,
-            p.ik.joint_speed_limit,
-            p.arms,
-            self.dt,
-        )
-        q_dot_up, ok = solve_arm(aqp, self.arm_solver)
+        q_up = self.q_cmd[arms]
+        step = solve_arm_step(
+            self.arm_solver, ks.cmm_yaw_low, q_dot_low, ks.cmm_yaw_up, q_up, self._q_init_arms,
+            self._limits_arms, self._arm_constants,
+        )  # fmt: skip
+        if step is not None:  # the two calls below in one compiled step
+            q_dot_up, ok = step
+        else:
+            aqp = build_arm_qp(
+                ks.cmm_yaw_low, q_dot_low, ks.cmm_yaw_up, q_up, self._q_init_arms,
+                self._q_min_arms, self._q_max_arms, p.ik.joint_speed_limit, p.arms, self.dt,
+            )  # fmt: skip
+            q_dot_up, ok = solve_arm(aqp, self.arm_solver)
         return (q_dot_up, True) if ok else (np.zeros(len(arms)), False)
 
     def _count_failures(
@@ -546,17 +567,6 @@ def _pelvis_step(pelvis, com_des, com_des_prev, com_meas, gain, height, dt):
     pelvis[:2] += (com_des - com_des_prev) + gain * (com_des - com_meas[:2])
     pelvis[2] = height
     return (pelvis - prev) / dt
-
-
-@kernel
-def _foot_targets(p_left, v_left, p_right, v_right, pelvis, v_pelvis):
-    """The feet's targets relative to the pelvis: positions (3,) and feed-forward twists (6,)
-    [linear; angular] (the feet do not turn), left and right."""
-    v_ff_l = np.zeros(6)
-    v_ff_l[:3] = v_left - v_pelvis
-    v_ff_r = np.zeros(6)
-    v_ff_r[:3] = v_right - v_pelvis
-    return p_left - pelvis, p_right - pelvis, v_ff_l, v_ff_r
 
 
 @kernel

@@ -150,7 +150,7 @@ def test_a_compile_error_raises_at_the_first_solver_not_per_tick(unbound):
     def broken(*args):
         raise TypeError("the kernel does not compile: boom")
 
-    unbound.setattr(compiled, "_daqp_call", broken)
+    unbound.setattr(compiled, "daqp_call", broken)
     with pytest.raises(TypeError, match="boom"):
         QpSolver("daqp")
 
