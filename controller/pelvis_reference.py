@@ -56,6 +56,7 @@ import numpy as np
 from controller.compiled import kernel
 from controller.params import LATERAL_MODES
 
+_CURRENT, _PREDICTED = LATERAL_MODES.index("current"), LATERAL_MODES.index("predicted")
 HIP_HALF_WIDTH = 0.105  # [m] lateral distance from the pelvis centre to each hip joint
 
 
@@ -167,6 +168,56 @@ def reference_pelvic_angles(
     if lateral[0, 0] <= 0.0 or lateral[0, 1] >= 0.0:  # held over the horizon, or per sample
         raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
     return _reference_angles(_rows(p_pelvis), _rows(p_left), _rows(p_right), float(k_pel), lateral)
+
+
+_MODE_CODES = {mode: i for i, mode in enumerate(LATERAL_MODES)}
+
+
+@kernel
+def _reference_step(mode, com, left, right, com_now, left_now, right_now, width, k, lateral, ref):
+    """:func:`lateral_distances` (``mode``: its index in ``LATERAL_MODES``, ``width``: the
+    half step width, ``k``: (floor, k_pel)) into ``lateral`` (N, 2) and eq. (28)-(33) into
+    ``ref`` (N,); returns whether the first row's distances have the right signs."""
+    n = com.shape[0]
+    if mode == _CURRENT:
+        lateral[:] = _current_lateral(com_now, left_now, right_now, k[0], n)
+    elif mode == _PREDICTED:
+        lateral[:] = _predicted_lateral(com, left, right, k[0])
+    else:
+        lateral[:, 0] = width
+        lateral[:, 1] = -width
+    if lateral[0, 0] <= 0.0 or lateral[0, 1] >= 0.0:
+        return False
+    ref[:] = _reference_angles(com, left, right, k[1], lateral)
+    return True
+
+
+def reference_with_lateral(
+    mode: str,
+    p_pelvis: np.ndarray,
+    p_left: np.ndarray,
+    p_right: np.ndarray,
+    p_pelvis_now: np.ndarray,
+    p_left_now: np.ndarray,
+    p_right_now: np.ndarray,
+    half_width: float,
+    floor_and_gain: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(theta_ref (N,), lateral (N, 2)): :func:`lateral_distances` then
+    :func:`reference_pelvic_angles` in one compiled call (the walker's tick), for float
+    arrays of rows (N, 2) and points (2,); ``floor_and_gain``: (lateral floor, k_pel)."""
+    n = p_pelvis.shape[0]
+    lateral, ref = np.empty((n, 2)), np.empty(n)
+    code = _MODE_CODES.get(mode)
+    if code is None:
+        raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
+    ok = _reference_step(
+        code, p_pelvis, p_left, p_right, p_pelvis_now, p_left_now, p_right_now,
+        float(half_width), floor_and_gain, lateral, ref,
+    )  # fmt: skip
+    if not ok:
+        raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
+    return ref, lateral
 
 
 def _rows(a: np.ndarray) -> np.ndarray:

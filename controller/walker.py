@@ -76,7 +76,7 @@ from controller.ik import (
 from controller.kinematics import KinState, RobotKinematics, jacobian_conditions, leg_reach
 from controller.params import ControllerParams
 from controller.pelvis_mpc import PelvisPlan
-from controller.pelvis_reference import lateral_distances, reference_pelvic_angles
+from controller.pelvis_reference import reference_with_lateral
 from controller.qp import QpSolver
 from controller.strategy import Runner, StrategyInputs, create
 
@@ -115,7 +115,7 @@ class TickOutput:
     swing_side: int
     failures: dict[str, bool]  # which QP failed this tick (layer -> bool)
     speed_limited: bool  # a joint velocity sat at its limit
-    layer_s: dict[str, float] = field(default_factory=dict)  # [s] time per layer (with clock)
+    layer_s: dict[str, float] = field(default_factory=dict)  # [s] per layer (Walker.layer_times)
     strategy_s: float = 0.0  # [s] the strategy's waist_rate call alone (0 without a clock)
     _diagnostics: tuple[float, float, np.ndarray] | None = None  # cache of the three below
 
@@ -153,7 +153,8 @@ class Walker:
         q_init: (n_joints,) initial joint angles (walk-ready pose) [rad].
         p_world_pelvis_init: (3,) initial pelvis (base) position [m].
         backend: QP back-end of every layer ("daqp": exact active set, the default; "osqp").
-        clock: optional zero-argument timer for per-layer timings.
+        clock: optional zero-argument timer: the strategy's time (``TickOutput.strategy_s``)
+            and, with :attr:`layer_times` set, every layer's (``TickOutput.layer_s``).
 
     Raises:
         ValueError: ``params.method`` names no registered strategy.
@@ -172,13 +173,11 @@ class Walker:
     ):
         self.kin = kin
         self.clock = clock
+        self.layer_times = False  # time every layer (bench): a clock reading between blocks
         self.backend = backend
         self.params = params.validated()
         self.dt = params.control_dt
-        self._ik_constants = ik_constants(self.params.ik, self.dt)
-        self._arm_constants = arm_constants(
-            self.params.arms, self.dt, self.params.ik.joint_speed_limit
-        )
+        self._constants(self.params)
         self.t = 0.0
         self.q_cmd = np.array(q_init, dtype=float)
         self.q_init = self.q_cmd.copy()
@@ -231,10 +230,14 @@ class Walker:
             # another strategy: reset at this tick, from the waist rate the IK last commanded
             self.strategy = create(new.method, self.backend)
             self.ik_solver.reset()
-        if new.ik != old.ik or new.arms != old.arms:
-            self._ik_constants = ik_constants(new.ik, self.dt)
-            self._arm_constants = arm_constants(new.arms, self.dt, new.ik.joint_speed_limit)
+        self._constants(new)
         self.params = new
+
+    def _constants(self, p: ControllerParams) -> None:
+        """The compiled steps' constants of the parameters ``p`` (arrays made once)."""
+        self._ik_constants = ik_constants(p.ik, self.dt)
+        self._arm_constants = arm_constants(p.arms, self.dt, p.ik.joint_speed_limit)
+        self._floor_and_gain = np.array([p.pelvis.lateral_floor, p.pelvis.k_pel])
 
     @property
     def finished(self) -> bool:
@@ -259,13 +262,14 @@ class Walker:
             self._apply_pending()
         t = self.t
         clock = self.clock or float  # no clock: every reading is float() = 0.0
-        c0 = clock()
+        lc = clock if self.layer_times else float  # the layers' readings: only when asked
+        c0 = lc()
         plan, times = self._plan_rows(t, self.params.com.zmp_margin)  # 1-2, 5
-        c1 = clock()
+        c1 = lc()
         com_plan, p_world_com_des = self._predicted_com(t, plan, times)  # 3
-        c2 = clock()
+        c2 = lc()
         p_world_com_meas = self._measured_com(q_meas, plan)  # 4
-        c3 = clock()
+        c3 = lc()
         v_world_pelvis = self._pelvis_position(p_world_com_des, p_world_com_meas)  # 4
         theta_ref, lateral = self._reference_angles(plan, com_plan, p_world_com_des)  # 6
         s0 = clock()
@@ -274,14 +278,17 @@ class Walker:
         )
         c4 = clock()
         ks = self.kin.compute(self.q_cmd)  # the kinematics the IK and the arms run on
-        c5 = clock()
+        c5 = lc()
         q_dot_low, ik_ok = self._inverse_kinematics(plan, ks, v_world_pelvis, waist_rate)  # 8
-        c6 = clock()
+        c6 = lc()
         q_dot_up, arm_ok = self._arm_swing(ks, q_dot_low)  # 9
-        c7 = clock()
-        q_dot, self.q_cmd, speed_limited = _joint_targets(  # 10
-            self.q_cmd, q_dot_low, q_dot_up, self.arms, self.dt, self.params.ik.joint_speed_limit
-        )
+        c7 = lc()
+        q_dot, q_new = np.empty(len(self.q_cmd)), np.empty(len(self.q_cmd))
+        speed_limited, h_low, h_up = _joint_targets(  # 10
+            self.q_cmd, q_dot_low, q_dot_up, self.arms, self.dt,
+            self.params.ik.joint_speed_limit, ks.cmm_yaw_low, ks.cmm_yaw_up, q_dot, q_new,
+        )  # fmt: skip
+        self.q_cmd = q_new
         failures = self._count_failures(com_plan, pelvis_plan, ik_ok, arm_ok)
         self.t = t + self.dt
         return TickOutput(
@@ -299,15 +306,15 @@ class Walker:
             zmp_ref=plan.zmp_ref[0].copy(),
             waist_angle=float(self.q_cmd[0]),
             waist_rate=self._last_waist_rate,
-            h_low=yaw_momentum(ks.cmm_yaw_low, q_dot_low),
-            h_up=yaw_momentum(ks.cmm_yaw_up, q_dot_up),
+            h_low=h_low,
+            h_up=h_up,
             kin=ks,
             step_index=int(plan.step[0]),
             in_ssp=bool(plan.in_ssp[0]),
             swing_side=int(plan.swing_side[0]),
             failures=failures,
             speed_limited=bool(speed_limited),
-            layer_s=_layer_times(c0, c1, c2, c3, c4, c5, c6, c7) if self.clock else {},
+            layer_s=_layer_times(c0, c1, c2, c3, c4, c5, c6, c7) if lc is not float else {},
             strategy_s=c4 - s0,
         )
 
@@ -390,7 +397,7 @@ class Walker:
             com_h = np.tile(p_world_com_des[:2], (n_h, 1))
             feet_l = np.tile(plan.p_left[0, :2], (n_h, 1))
             feet_r = np.tile(plan.p_right[0, :2], (n_h, 1))
-        lateral = lateral_distances(
+        return reference_with_lateral(  # lateral_distances, then reference_pelvic_angles
             p.lateral_distance,
             com_h,
             feet_l,
@@ -399,9 +406,8 @@ class Walker:
             plan.p_left[0, :2],
             plan.p_right[0, :2],
             self.params.walk.step_width / 2,
-            p.lateral_floor,
+            self._floor_and_gain,
         )
-        return reference_pelvic_angles(com_h, feet_l, feet_r, p.k_pel, lateral), lateral
 
     def _pelvis_strategy(
         self,
@@ -570,12 +576,16 @@ def _pelvis_step(pelvis, com_des, com_des_prev, com_meas, gain, height, dt):
 
 
 @kernel
-def _joint_targets(q_cmd, q_dot_low, q_dot_up, arms, dt, speed_limit):
-    """Eq. (40): the joint velocities (n,) (the lower joints first, the arms' at ``arms``), the
-    new commanded joints q + dt q_dot (a new array: q_cmd is replaced, never written), and
-    whether a lower joint's velocity sits at the speed limit."""
-    q_dot = np.zeros(q_cmd.shape[0])
+def _joint_targets(q_cmd, q_dot_low, q_dot_up, arms, dt, limit, a_low, a_up, q_dot, q_new):
+    """Eq. (40): the joint velocities into ``q_dot`` (n,) (the lower joints first, the arms'
+    at ``arms``), the new commanded joints q + dt q_dot into ``q_new`` (q_cmd is replaced,
+    never written). Returns whether a lower joint's velocity sits at the speed limit and the
+    yaw momenta h_low, h_up of eq. (41)-(42) commanded (``a_low``, ``a_up``: their CMM rows).
+    """
+    q_dot[:] = 0.0
     q_dot[: q_dot_low.shape[0]] = q_dot_low
     for i in range(arms.shape[0]):
         q_dot[arms[i]] = q_dot_up[i]
-    return q_dot, q_cmd + dt * q_dot, np.abs(q_dot_low).max() >= speed_limit * 0.999
+    q_new[:] = q_cmd + dt * q_dot
+    limited = np.abs(q_dot_low).max() >= limit * 0.999
+    return limited, yaw_momentum(a_low, q_dot_low), yaw_momentum(a_up, q_dot_up)
