@@ -313,7 +313,9 @@ class ComMpc:
         if args is not None:  # eq. (18) and (25-26) in one compiled step
             qp = self._qp
             x, com, next_state = np.zeros(2 * N), np.empty((N, 2)), np.empty((3, 2))
-            status, flag = _step(self._maps, x0, ref, lo, hi, qp.q, qp.l, qp.u, x, com, next_state, *args)
+            status, flag = _step(
+                self._maps, x0, ref, lo, hi, qp.q, qp.l, qp.u, x, com, next_state, *args
+            )
             res = self.solver.settle(qp, x, status, flag, args[1])
         else:
             qp = self.build(x0, ref, lo, hi)

@@ -452,7 +452,7 @@ def daqp_call(q, l, u, out, mask, setup, buf, sense, eq, result, ptrs):
     valid, changed = daqp_vectors(q, l, u, f, bu, bl, eq, sense, setup)
     if not valid:
         return -1, 0
-    work, problem = ptrs[0], ptrs[1]
+    work, problem = int(ptrs[0]), int(ptrs[1])  # Python ints for ctypes (switched off)
     if setup:
         flag = _setup_daqp(problem, work, buf[2 * n + 3 * m :].ctypes.data)
     else:

@@ -152,7 +152,9 @@ def foot_targets(p_left, v_left, p_right, v_right, pelvis, v_pelvis):
 
 
 @kernel
-def _step(T_left, T_right, feet, pelvis, v_pelvis, JtJ, J, q, limits, k, waist_rate, H, qp_vectors, x, *ws):
+def _step(
+    T_left, T_right, feet, pelvis, v_pelvis, JtJ, J, q, limits, k, waist_rate, H, qp_vectors, x, *ws
+):
     """Eq. (39) for flat feet, built and solved in one compiled step (:func:`solve_ik_step`):
     the feet's targets from row 1 of the plan's (p_left, v_left, p_right, v_right)
     ``feet``, relative to the pelvis (``pelvis``, ``v_pelvis``), their twists
@@ -164,7 +166,9 @@ def _step(T_left, T_right, feet, pelvis, v_pelvis, JtJ, J, q, limits, k, waist_r
         p_left[1], v_left[1], p_right[1], v_right[1], pelvis, v_pelvis
     )
     v_des = _foot_twists(T_left, _FLAT, p_des_l, v_ff_l, T_right, _FLAT, p_des_r, v_ff_r, k[0])
-    P, c, lo, hi = _ik_qp(JtJ, J, v_des, q, limits[0], limits[1], k[1], k[2], k[3], waist_rate, k[4])
+    P, c, lo, hi = _ik_qp(
+        JtJ, J, v_des, q, limits[0], limits[1], k[1], k[2], k[3], waist_rate, k[4]
+    )
     H[:] = P
     qp_vectors[0], qp_vectors[1], qp_vectors[2] = c, lo, hi
     for v in H.ravel():

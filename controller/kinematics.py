@@ -89,7 +89,8 @@ class RobotKinematics:
         self.q_max = m.upperPositionLimit[7:].copy()
         self.sole_frame_ids = tuple(m.getFrameId(s, pin.OP_FRAME) for s in FOOT_SITES)
         self.hip_frame_ids = tuple(m.getFrameId(b, pin.BODY) for b in HIP_BODIES)
-        self.ankle_joint_ids = tuple(m.getJointId(j) for j in _ANKLE_JOINTS)
+        # the ankle joints' frames (a joint's frame sits at its origin: the ankle point)
+        self.ankle_frame_ids = tuple(m.getFrameId(j, pin.JOINT) for j in _ANKLE_JOINTS)
         self.total_mass = float(pin.computeTotalMass(m))
         self._q_identity_base = np.zeros(m.nq)  # base at the origin, quaternion xyzw identity
         self._q_identity_base[6] = 1.0
@@ -134,10 +135,10 @@ class RobotKinematics:
         J_low[6:] = pin.getFrameJacobian(m, d, fr, lws)[:, low]
         # Only the frames used here (not all frames of the model).
         upd = pin.updateFramePlacement
-        (hl, hr), (al, ar) = self.hip_frame_ids, self.ankle_joint_ids
+        (hl, hr), (al, ar) = self.hip_frame_ids, self.ankle_frame_ids
         hips, ankles = np.empty((2, 3)), np.empty((2, 3))
         hips[0], hips[1] = upd(m, d, hl).translation, upd(m, d, hr).translation
-        ankles[0], ankles[1] = d.oMi[al].translation, d.oMi[ar].translation
+        ankles[0], ankles[1] = upd(m, d, al).translation, upd(m, d, ar).translation
         return KinState(
             upd(m, d, fl).homogeneous,
             upd(m, d, fr).homogeneous,

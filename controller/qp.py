@@ -177,10 +177,16 @@ class QpSolver:
         None when no compiled step runs (OSQP, ``daqp.Model``, ``compiled_steps`` off, a new
         P or A that is not finite): the layer then builds its QP and calls :meth:`solve`.
         :meth:`settle` records the step's solve."""
-        binding = self._binding
+        binding, work = self._binding, self._daqp
         if binding is None or not self.compiled_steps:
             return None
-        work = self._daqp
+        if (  # the steady state: the workspace of this A, and of this P unless the step writes it
+            work is not None
+            and A is self._A_obj
+            and not A.flags.writeable
+            and (P is None or (P is self._P_obj and not P.flags.writeable))
+        ):
+            return (UPDATE_H if P is None else 0, False, *work.args)
         m, n = A.shape
         setup = work is None or work.shape != (m, n)
         # _same inlined (this runs four times a tick)
@@ -213,9 +219,14 @@ class QpSolver:
         """Record a compiled step's solve of ``qp`` (``x``, and ``status``, ``flag`` and
         ``setup`` as :func:`controller.compiled.daqp_call` and :meth:`step_args` gave them)
         as :meth:`solve` records its own; the same result, fallback and failure count."""
-        if status != 0 and self._daqp is not None:
+        if status == 0:  # as _finish's success
+            self.x_prev = x
+            self.last_qp, res = qp, QpResult(x, True, "solved")
+            self.last_result = res
+            return res
+        if self._daqp is not None:
             self._daqp.failed(status, setup)
-        return self._finish(qp, x if status == 0 else None, _daqp_status(status, flag, setup))
+        return self._finish(qp, None, _daqp_status(status, flag, setup))
 
     def _solve_daqp(self, qp: QP) -> tuple[np.ndarray | None, str]:
         """DAQP on the QP (:class:`controller.compiled.DaqpWorkspace`): P and A copied to the

@@ -460,7 +460,11 @@ class Walker:
         the waist pinned to ``waist_rate``; 0 (the last command held) if the QP failed."""
         q_low = self.q_cmd[:13]  # the lower joints (a view: q_cmd is replaced, never written)
         feet = (plan.p_left, plan.v_left, plan.p_right, plan.v_right)
-        pelvis, T_left, T_right = self.p_world_pelvis_des, ks.T_pelvis_left_sole, ks.T_pelvis_right_sole
+        pelvis, T_left, T_right = (
+            self.p_world_pelvis_des,
+            ks.T_pelvis_left_sole,
+            ks.T_pelvis_right_sole,
+        )
         step = solve_ik_step(
             self.ik_solver, ks.J_low, T_left, T_right, feet, pelvis, v_world_pelvis, q_low,
             self._limits_low, self._ik_constants, waist_rate,

@@ -86,6 +86,18 @@ def test_without_numba_the_walk_is_the_compiled_one(tmp_path):
         params=_params("redundancy", 0.3, 1)))))))  # fmt: skip
 
 
+def _daqp_fails(monkeypatch) -> None:
+    """DAQP reports every QP infeasible (exit flag -1), on both ways a layer solves: its
+    compiled step (the status it hands QpSolver.settle) and QpSolver.solve."""
+    settle = QpSolver.settle
+    monkeypatch.setattr(
+        QpSolver,
+        "settle",
+        lambda self, qp, x, status, flag, setup: settle(self, qp, x, -3, -1, setup),
+    )
+    monkeypatch.setattr(compiled.DaqpWorkspace, "solve", lambda self, *args: (-3, -1))
+
+
 @pytest.fixture
 def unbound(monkeypatch):
     """The binding not made yet in this process (made again at the next DAQP solver)."""
@@ -172,7 +184,7 @@ def test_a_run_whose_qps_all_fail_is_no_success(unbound, capsys):
     from app.cli import main
 
     compiled.daqp_binding()  # made (and checked) before DAQP turns bad
-    unbound.setattr(compiled.DaqpWorkspace, "solve", lambda self, *args: (-3, -1))
+    _daqp_fails(unbound)
     s = summarize(run(RunConfig(params=_params("mpc", 0.3, 1))))
     assert not s["fell"] and s["solver_failure_share"] == 1.0
     assert not s["success"] and SOLVER_FAILURES in s["unsuccessful"]
@@ -209,7 +221,7 @@ def test_a_live_walk_whose_qps_all_fail_finishes_with_no_success(unbound):
     from app.web.scene import label_text
 
     compiled.daqp_binding()
-    unbound.setattr(compiled.DaqpWorkspace, "solve", lambda self, *args: (-3, -1))
+    _daqp_fails(unbound)
     params = ControllerParams().replace(walk={"n_steps": 1})
     intent = dataclasses.replace(initial_intent(params, ["fixed"]), anchor=(0.0, 0.0))
     frames: list = []

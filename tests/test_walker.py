@@ -183,7 +183,8 @@ def test_switching_method_live_keeps_walking():
 
 @pytest.mark.parametrize("layer", ["ik_solver", "arm_solver", "pelvis_mpc", "com_mpc"])
 def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
-    """Every layer's QP fails for 10 ticks (0.05 s) mid-walk: no crash, counted, still walks."""
+    """Every layer's QP fails for 10 ticks (0.05 s) mid-walk, whichever way it solves (its
+    compiled step or solve): no crash, counted, still walks."""
     from controller.qp import QpResult
 
     session = Session(RunConfig(params=_params("mpc", 0.2, 3)))
@@ -204,7 +205,16 @@ def test_a_failing_qp_is_counted_and_the_loop_goes_on(layer):
             return QpResult(fallback, False, "forced failure")
         return real_solve(qp)
 
+    real_settle = solver.settle
+
+    def flaky_settle(qp, x, status, flag, setup):  # a layer's compiled step: the same ticks
+        calls["n"] += 1
+        if 400 <= calls["n"] < 410:
+            status, flag = -3, -1  # DAQP's "infeasible"
+        return real_settle(qp, x, status, flag, setup)
+
     solver.solve = flaky
+    solver.settle = flaky_settle
     while not session.done:
         out = session.tick()
         assert np.all(np.isfinite(out.q_target))

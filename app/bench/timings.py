@@ -87,17 +87,17 @@ def _warmup_ticks(session: Session) -> int:
 
 
 def closed_loop(ticks: int) -> dict[str, Any]:
-    """Tick and per-layer times and the real-time factor of one closed-loop robot."""
+    """Tick times and the real-time factor of one closed-loop robot, as a run steps it (the
+    walker's per-layer clock off: :func:`layer_split` reads the layers in a second session)."""
     session = Session(RunConfig(params=bench_params(ticks)))
     warm = _warmup_ticks(session)
     for _ in range(warm):
         session.tick()
-    layer_s: list[dict[str, float]] = []
     split0 = dict(session.time_split)
     cpu0 = time.process_time()
     start = time.perf_counter()
     for _ in range(ticks):  # what run() does per tick
-        layer_s.append(session.tick().layer_s)
+        session.tick()
     wall = time.perf_counter() - start
     cpu = time.process_time() - cpu0
     tick = session.series.column("tick_ms", last=ticks)
@@ -107,13 +107,6 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         "tick_ms_p99": float(np.percentile(tick, 99)),
         "tick_ms_max": float(np.max(tick)),
         "tick_ms_mean": float(np.mean(tick)),
-        "layer_ms": {
-            name: float(np.median([d[name] for d in layer_s])) * 1e3 for name in layer_s[0]
-        },
-        # means too: the plan's table is filled again every 100 ticks, which no median shows
-        "layer_ms_mean": {
-            name: float(np.mean([d[name] for d in layer_s])) * 1e3 for name in layer_s[0]
-        },
         # mean per tick: the controller, MuJoCo (the substeps and their copies) and the
         # measurement (contacts, CoP, support polygon, series row, bookkeeping)
         "time_split_ms": {k: (v - split0[k]) / ticks * 1e3 for k, v in session.time_split.items()},
@@ -126,6 +119,70 @@ def closed_loop(ticks: int) -> dict[str, Any]:
         "substeps": ticks * session.world.n_substeps,
         "sim_dt": session.world.sim_dt,
         "control_dt": session.params.control_dt,
+    }
+
+
+def layer_split(ticks: int) -> dict[str, Any]:
+    """Per layer, in a closed-loop session of its own with the walker's per-layer clock on
+    (``Walker.layer_times``): the median and mean time, and for the four QP layers the split
+    into DAQP's solve (its own clock: the active-set iterations on the factored problem) and
+    the rest (the problem's build, DAQP's update of its factors, the data's way in and out
+    between Python, the compiled step and C)."""
+    session = Session(RunConfig(params=bench_params(ticks)))
+    walker = session.walker
+    walker.layer_times = True
+    for _ in range(_warmup_ticks(session)):
+        session.tick()
+    layer_s: list[dict[str, float]] = []
+    solve_s: dict[str, list[float]] = {name: [] for name in QP_LAYERS}
+    for _ in range(ticks):
+        layer_s.append(session.tick().layer_s)
+        for name, solver in _layer_solvers(walker).items():
+            qp = solver.last_qp
+            ms = solver.last_stats(qp)[1] if qp is not None else math.nan
+            solve_s[name].append(ms * 1e-3)
+    names = list(layer_s[0])
+    mean = {n: float(np.mean([d[n] for d in layer_s])) * 1e3 for n in names}
+    solve = {n: float(np.nanmean(v)) * 1e3 for n, v in solve_s.items() if np.isfinite(v).any()}
+    return {
+        "layer_ms": {n: float(np.median([d[n] for d in layer_s])) * 1e3 for n in names},
+        # means too: the plan's table is filled again every 100 ticks, which no median shows
+        "layer_ms_mean": mean,
+        "layer_solve_ms_mean": solve,
+        "layer_build_ms_mean": {n: mean[n] - solve[n] for n in solve},
+    }
+
+
+def _layer_solvers(walker: Any) -> dict[str, QpSolver]:
+    """The QP solvers of the walker's four layers (the pelvic MPC's: the paper's strategy)."""
+    mpc = getattr(walker.strategy.strategy, "mpc", None)
+    solvers = {"com_mpc": walker.com_mpc.solver, "ik": walker.ik_solver}
+    if mpc is not None:
+        solvers["pelvis_mpc"] = mpc.solver
+    if walker.params.arms.enabled:
+        solvers["arm_swing"] = walker.arm_solver
+    return solvers
+
+
+def open_loop(ticks: int) -> dict[str, Any]:
+    """The controller tick in a walk loop without physics, as the peer's loop runs: the walker
+    reads back its own commanded joints as measured, tick after tick (the same parameters and
+    warm-up as :func:`closed_loop`; no simulation step between two ticks)."""
+    session = Session(RunConfig(params=bench_params(ticks)), record=False)
+    walker = session.walker
+    for _ in range(_warmup_ticks(session)):
+        walker.tick(walker.q_cmd)
+    clock, out = time.perf_counter, np.empty(ticks)
+    for i in range(ticks):
+        t0 = clock()
+        walker.tick(walker.q_cmd)
+        out[i] = clock() - t0
+    ms = out * 1e3
+    return {
+        "tick_ms_median": float(np.median(ms)),
+        "tick_ms_mean": float(np.mean(ms)),
+        "tick_ms_p99": float(np.percentile(ms, 99)),
+        "tick_ms_max": float(np.max(ms)),
     }
 
 
@@ -270,6 +327,7 @@ def record_qps(ticks: int) -> dict[str, list[QP]]:
         "arm_swing": w.arm_solver,
     }
     for name, solver in solvers.items():
+        solver.compiled_steps = False  # each layer builds its QP and calls solve (the same QPs)
         _wrap(solver, record[name], recording)
     recording[0] = True
     for _ in range(ticks):
@@ -497,6 +555,8 @@ def run_bench(ticks: int = 600, peer_python_path: str | None = None) -> dict[str
     bare_sim, bare_wall, bare_cpu = bare_steps(half, sim_dt, control_dt)
     loop = closed_loop(ticks)
     unrecorded = unrecorded_loop(ticks)
+    layers = layer_split(ticks)
+    kinematic = open_loop(ticks)
     s2, w2, c2 = bare_steps(ticks * n_sub - half, sim_dt, control_dt)
     bare_sim, bare_wall, bare_cpu = bare_sim + s2, bare_wall + w2, bare_cpu + c2
     bare_rtf = bare_sim / bare_wall
@@ -514,8 +574,11 @@ def run_bench(ticks: int = 600, peer_python_path: str | None = None) -> dict[str
     return {
         "tick_ms_median": loop["tick_ms_median"],
         "tick_ms_p99": loop["tick_ms_p99"],
-        "layer_ms": loop["layer_ms"],
-        "layer_ms_mean": loop["layer_ms_mean"],
+        "layer_ms": layers["layer_ms"],
+        "layer_ms_mean": layers["layer_ms_mean"],
+        "layer_solve_ms_mean": layers["layer_solve_ms_mean"],
+        "layer_build_ms_mean": layers["layer_build_ms_mean"],
+        "open_loop": kinematic,
         "realtime_factor": loop["realtime_factor"],
         "bare_step_realtime_factor": bare_rtf,
         "overhead_ratio": bare_rtf / loop["realtime_factor"],
@@ -575,6 +638,12 @@ def format_report(r: dict[str, Any]) -> str:
         "per layer (mean)     "
         + "   ".join(f"{k} {v:.3f}" for k, v in r["layer_ms_mean"].items())
         + "  [ms]",
+        "  QP layers (mean)   "
+        + "   ".join(
+            f"{k} {r['layer_build_ms_mean'][k]:.3f} + {v:.3f}"
+            for k, v in r["layer_solve_ms_mean"].items()
+        )
+        + "  [ms]: build and data + DAQP's solve",
         "time per tick        "
         + "   ".join(f"{k} {v:.3f}" for k, v in r["time_split_ms"].items())
         + "  [ms]",
@@ -614,13 +683,19 @@ def format_report(r: dict[str, Any]) -> str:
     elif "error" in peer:
         lines.append(f"peer: placo's walk loop failed: {peer['error']}")
     else:
+        o = r["open_loop"]
         lines += [
             f"peer: {peer['name']}, our timing and step length, same ticks, re-planning "
             f"over {peer['steps_ahead']} steps ({peer['horizon_s']:.1f} s) ahead",
-            f"  {'tick [ms]':22s} {'median':>8s} {'mean':>8s} {'p99':>8s} {'max':>8s}",
-            f"  {'ours (controller)':22s} {r['tick_ms_median']:8.3f} {r['tick_ms_mean']:8.3f} "
-            f"{r['tick_ms_p99']:8.3f} {r['tick_ms_max']:8.3f}",
-            f"  {'placo':22s} {peer['tick_ms_median']:8.3f} {peer['tick_ms_mean']:8.3f} "
+            f"  {'tick [ms]':26s} {'median':>8s} {'mean':>8s} {'p99':>8s} {'max':>8s}"
+            "   mean / placo's",
+            f"  {'ours, closed loop':26s} {r['tick_ms_median']:8.3f} {r['tick_ms_mean']:8.3f} "
+            f"{r['tick_ms_p99']:8.3f} {r['tick_ms_max']:8.3f}   "
+            f"{r['tick_ms_mean'] / peer['tick_ms_mean']:.2f}x  (MuJoCo steps between ticks)",
+            f"  {'ours, no physics':26s} {o['tick_ms_median']:8.3f} {o['tick_ms_mean']:8.3f} "
+            f"{o['tick_ms_p99']:8.3f} {o['tick_ms_max']:8.3f}   "
+            f"{o['tick_ms_mean'] / peer['tick_ms_mean']:.2f}x  (tick after tick, as placo's)",
+            f"  {'placo':26s} {peer['tick_ms_median']:8.3f} {peer['tick_ms_mean']:8.3f} "
             f"{peer['tick_ms_p99']:8.3f} {peer['tick_ms_max']:8.3f}   (re-planning ticks "
             f"{100 * peer['replan_tick_share']:.1f} % ({peer['replans']}), median "
             f"{peer['replan_tick_ms_median'] or math.nan:.1f} ms, in CPU time "
