@@ -43,6 +43,19 @@ def test_interface_keys_are_finite_and_positive(report):
         assert _finite_positive(report["layer_ms"][name]), (name, report["layer_ms"][name])
 
 
+def test_the_qp_layers_split_into_build_and_solve_and_the_tick_without_physics(report):
+    """Each QP layer's mean time splits into its build (and data) and DAQP's solve, a part
+    of it, both positive;
+    the tick without physics between ticks (the peer's way) has its figures."""
+    assert set(report["layer_solve_ms_mean"]) == set(QP_LAYERS)
+    for name in QP_LAYERS:
+        build, solve = report["layer_build_ms_mean"][name], report["layer_solve_ms_mean"][name]
+        assert _finite_positive(build) and _finite_positive(solve), (name, build, solve)
+        assert solve < report["layer_ms_mean"][name]  # DAQP's solve is a part of its layer
+    for key in ("tick_ms_median", "tick_ms_mean", "tick_ms_p99", "tick_ms_max"):
+        assert _finite_positive(report["open_loop"][key]), key
+
+
 def test_overhead_ratio_is_the_ratio_of_the_two_factors(report):
     ratio = report["bare_step_realtime_factor"] / report["realtime_factor"]
     assert report["overhead_ratio"] == pytest.approx(ratio)

@@ -20,7 +20,7 @@ import pytest
 from controller import compiled
 from controller.params import ControllerParams
 from controller.qp import QP, QpSolver, frozen
-from pelvic_walk.core.run import RunConfig, run, summarize
+from pelvic_walk.core.run import RunConfig, Session, run, summarize
 from pelvic_walk.core.summary import MISSED_FOOTHOLDS, SOLVER_FAILURES, TIMING_KEYS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -239,3 +239,56 @@ def test_a_live_walk_whose_qps_all_fail_finishes_with_no_success(unbound):
     assert robot.walks_completed == 1 and robot.last_walk_success is False
     assert "QPs failed on 100 % of the ticks" in robot.unsuccessful
     assert "NO SUCCESS" in label_text(robot, frames[-1])
+
+
+def _walk(monkeypatch, compiled_steps: bool, method: str) -> list[tuple]:
+    """Per tick: the targets, the CoM and pelvic plans, and each layer's last QP."""
+    monkeypatch.setattr(QpSolver, "compiled_steps", compiled_steps)
+    params = _params(method, 0.3, 2).replace(arms={"enabled": method != "redundancy"})
+    session = Session(RunConfig(params=params))
+    w, out = session.walker, []
+    for i in range(520):
+        if i == 300:  # a replan and new gains mid-walk: the steps' constants follow
+            w.replace_params(walk={"step_length": 0.25}, ik={"foot_gain": 25.0})
+        o = session.tick()
+        qps = [s.last_qp for s in (w.com_mpc.solver, w.ik_solver, w.arm_solver)]
+        mpc = getattr(w.strategy.strategy, "mpc", None)
+        if mpc is not None:
+            qps.append(mpc.solver.last_qp)
+        pelvis = o.pelvis_plan
+        out.append(
+            (
+                o.q_target, o.q_dot, o.com_plan.com, o.com_plan.jerk, o.com_plan.next_state,
+                o.theta_ref, o.lateral, (o.h_low, o.h_up, o.waist_rate, o.speed_limited),
+                None if pelvis is None else (pelvis.angles, pelvis.rates, pelvis.acc,
+                                             pelvis.reference, pelvis.next_rate),
+                [None if qp is None else tuple(np.array(a, copy=True) for a in qp) for qp in qps],
+            )
+        )  # fmt: skip
+    assert sum(w.failure_counts.values()) == 0
+    return out
+
+
+@pytest.mark.parametrize("method", ["mpc", "fixed", "redundancy"])
+def test_the_compiled_steps_are_the_layers_calls_bit_for_bit(monkeypatch, method):
+    """Each QP layer's compiled step (build, DAQP, outputs in one call) gives what its
+    separate calls give (build the QP, QpSolver.solve, the outputs), bit for bit: the same
+    targets, plans and QPs at every tick, through a replan and a change of gains."""
+    steps = _walk(monkeypatch, True, method)
+    calls = _walk(monkeypatch, False, method)
+    assert len(steps) == len(calls)
+    for i, (a, b) in enumerate(zip(steps, calls, strict=True)):
+        np.testing.assert_equal(a, b, err_msg=f"tick {i}")
+
+
+def test_every_kernel_cache_is_keyed_on_every_controller_module():
+    """A kernel's compiled code holds the other modules' kernels it calls (a layer's step
+    calls daqp_call): its cache is stale when any module of controller/ changes."""
+    if not compiled.JIT:
+        pytest.skip("numba switched off: nothing is cached")
+    from controller import com_mpc, ik
+
+    stamp = compiled._controller_stamp()
+    assert {name for name, *_ in stamp} >= {"compiled.py", "com_mpc.py", "ik.py", "walker.py"}
+    for kernel in (com_mpc._step, ik._step, compiled.daqp_call):
+        assert kernel._cache._cache_file._source_stamp[1] == stamp
