@@ -127,7 +127,8 @@ def layer_split(ticks: int) -> dict[str, Any]:
     (``Walker.layer_times``): the median and mean time, and for the four QP layers the split
     into DAQP's solve (its own clock: the active-set iterations on the factored problem) and
     the rest (the problem's build, DAQP's update of its factors, the data's way in and out
-    between Python, the compiled step and C)."""
+    between Python, the compiled step and C; ``pelvis_mpc``'s also holds eq. (19)'s pelvis,
+    the reference of eq. (27)-(33) and the strategy's inputs, as ``layer_ms`` does)."""
     session = Session(RunConfig(params=bench_params(ticks)))
     walker = session.walker
     walker.layer_times = True
@@ -640,10 +641,10 @@ def format_report(r: dict[str, Any]) -> str:
         + "  [ms]",
         "  QP layers (mean)   "
         + "   ".join(
-            f"{k} {r['layer_build_ms_mean'][k]:.3f} + {v:.3f}"
+            f"{k} {1e3 * r['layer_build_ms_mean'][k]:.1f} + {1e3 * v:.1f}"
             for k, v in r["layer_solve_ms_mean"].items()
         )
-        + "  [ms]: build and data + DAQP's solve",
+        + "  [us]: build, update and data + DAQP's solve (its own clock)",
         "time per tick        "
         + "   ".join(f"{k} {v:.3f}" for k, v in r["time_split_ms"].items())
         + "  [ms]",
