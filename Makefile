@@ -23,11 +23,14 @@ $(TEST_STAMP): $(STAMP)
 	@touch $@
 
 # numba compiles the control tick's kernels (controller/compiled.py) at their first call and keeps
-# them in __pycache__: one short walk compiles them once (about 15 s of CPU) rather than every
-# test or worker process that happens to start first; a changed kernel module compiles again.
+# them in __pycache__: two short walks compile them once (about 30 s of CPU) rather than every
+# test or worker process that happens to start first (a live robot would stall meanwhile); the
+# free waist of redundancy is a kernel of its own (the IK's step with no waist rate); a changed
+# kernel module compiles again.
 KERNELS := $(VENV)/.kernels
 $(KERNELS): $(STAMP) $(wildcard controller/*.py) pelvic_walk/core/world.py
 	$(BIN)/pelvic-walk simulate --method mpc --step-length 0.2 --steps 1 > /dev/null
+	$(BIN)/pelvic-walk simulate --method redundancy --step-length 0.2 --steps 1 > /dev/null
 	@touch $@
 
 run: $(STAMP) $(KERNELS)
