@@ -25,11 +25,9 @@ QP: P = omega1 a a' + (omega2 dt^2 + omega3) I, q = omega1 h_low a - omega2 dt (
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
-from controller.compiled import daqp_call, kernel
+from controller.compiled import daqp_call_new_hessian, kernel
 from controller.explain import ActiveConstraint, QpExplain, explain_qp, joint_bound
 from controller.ik import velocity_bounds
 from controller.params import ArmParams
@@ -121,12 +119,7 @@ def _step(a_low_yaw, q_dot_low, a, q, q_up_init, limits, k, H, qp_vectors, x, *w
     qd_max)."""
     P, c = _arm_cost(a_low_yaw, q_dot_low, a, q, q_up_init, k[0], k[1], k[2], k[3])
     lo, hi = velocity_bounds(q, limits[0], limits[1], k[3], k[4])
-    H[:] = P
-    qp_vectors[0], qp_vectors[1], qp_vectors[2] = c, lo, hi
-    for v in H.ravel():
-        if not math.isfinite(v):  # as the solver checks a new P
-            return -1, 0
-    return daqp_call(c, lo, hi, x, *workspace)
+    return daqp_call_new_hessian(P, c, lo, hi, H, qp_vectors, x, *workspace)
 
 
 def solve_arm_step(

@@ -473,6 +473,20 @@ def daqp_call(q, l, u, out, mask, setup, buf, sense, eq, result, ptrs):
     return 0, exitflag
 
 
+@kernel
+def daqp_call_new_hessian(P, c, lo, hi, H, qp_vectors, x, mask, setup, buf, sense, eq, res, ptrs):
+    """:func:`daqp_call` for a step whose Hessian changes every tick (the IK's, the arm
+    swing's): P written into DAQP's ``H``, the vectors (c, lo, hi) into ``qp_vectors`` (the QP
+    the solver keeps for an explanation), P checked finite as :class:`controller.qp.QpSolver`
+    checks a new P (status -1 if not), then the solve into ``x``."""
+    H[:] = P
+    qp_vectors[0], qp_vectors[1], qp_vectors[2] = c, lo, hi
+    for v in H.ravel():
+        if not math.isfinite(v):
+            return -1, 0
+    return daqp_call(c, lo, hi, x, mask, setup, buf, sense, eq, res, ptrs)
+
+
 class DaqpWorkspace:
     """DAQP set up for QPs of one shape (m rows, n variables): its buffers, and the calls.
 

@@ -45,7 +45,7 @@ import math
 
 import numpy as np
 
-from controller.compiled import daqp_call, kernel
+from controller.compiled import daqp_call_new_hessian, kernel
 from controller.explain import ActiveConstraint, QpExplain, explain_qp, joint_bound
 from controller.params import IkParams
 from controller.qp import QP, QpSolver, frozen
@@ -169,12 +169,7 @@ def _step(
     P, c, lo, hi = _ik_qp(
         JtJ, J, v_des, q, limits[0], limits[1], k[1], k[2], k[3], waist_rate, k[4]
     )
-    H[:] = P
-    qp_vectors[0], qp_vectors[1], qp_vectors[2] = c, lo, hi
-    for v in H.ravel():
-        if not math.isfinite(v):  # as the solver checks a new P
-            return -1, 0
-    return daqp_call(c, lo, hi, x, *ws)
+    return daqp_call_new_hessian(P, c, lo, hi, H, qp_vectors, x, *ws)
 
 
 def solve_ik_step(

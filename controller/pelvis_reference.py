@@ -80,21 +80,40 @@ def lateral_distances(
         half_width: half the step width [m] (the nominal distance).
         floor: [m] smallest |distance| (``current`` and ``predicted``).
     """
-    p_pelvis = np.asarray(p_pelvis, dtype=float)
-    n = p_pelvis.shape[0] if p_pelvis.ndim == 2 else 1
-    if mode == "nominal":
-        return np.tile((half_width, -half_width), (n, 1))
-    elif mode == "current":
-        return _current_lateral(
-            np.asarray(p_pelvis_now, dtype=float),
-            np.asarray(p_left_now, dtype=float),
-            np.asarray(p_right_now, dtype=float),
-            float(floor),
-            n,
-        )
-    elif mode == "predicted":
-        return _predicted_lateral(_rows(p_pelvis), _rows(p_left), _rows(p_right), float(floor))
-    raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
+    p_pelvis = _rows(p_pelvis)
+    out = np.empty((p_pelvis.shape[0], 2))
+    _lateral(
+        _mode_code(mode), p_pelvis, _rows(p_left), _rows(p_right),
+        np.asarray(p_pelvis_now, dtype=float), np.asarray(p_left_now, dtype=float),
+        np.asarray(p_right_now, dtype=float), float(half_width), float(floor), out,
+    )  # fmt: skip
+    return out
+
+
+_MODE_CODES = {mode: i for i, mode in enumerate(LATERAL_MODES)}
+_SIGNS = "the left foot's lateral distance must be > 0 and the right's < 0"
+
+
+def _mode_code(mode: str) -> int:
+    """The index of ``mode`` in ``LATERAL_MODES`` (what the kernels read)."""
+    code = _MODE_CODES.get(mode)
+    if code is None:
+        raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
+    return code
+
+
+@kernel
+def _lateral(
+    mode, p_pelvis, p_left, p_right, p_pelvis_now, p_left_now, p_right_now, width, floor, out
+):
+    """:func:`lateral_distances` into ``out`` (N, 2), ``mode`` its index in ``LATERAL_MODES``."""
+    if mode == _CURRENT:
+        out[:] = _current_lateral(p_pelvis_now, p_left_now, p_right_now, floor, out.shape[0])
+    elif mode == _PREDICTED:
+        out[:] = _predicted_lateral(p_pelvis, p_left, p_right, floor)
+    else:  # nominal: half the step width
+        out[:, 0] = width
+        out[:, 1] = -width
 
 
 @kernel
@@ -166,26 +185,15 @@ def reference_pelvic_angles(
     """
     lateral = np.asarray(lateral, dtype=float)
     if lateral[0, 0] <= 0.0 or lateral[0, 1] >= 0.0:  # held over the horizon, or per sample
-        raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
+        raise ValueError(_SIGNS)
     return _reference_angles(_rows(p_pelvis), _rows(p_left), _rows(p_right), float(k_pel), lateral)
-
-
-_MODE_CODES = {mode: i for i, mode in enumerate(LATERAL_MODES)}
 
 
 @kernel
 def _reference_step(mode, com, left, right, com_now, left_now, right_now, width, k, lateral, ref):
-    """:func:`lateral_distances` (``mode``: its index in ``LATERAL_MODES``, ``width``: the
-    half step width, ``k``: (floor, k_pel)) into ``lateral`` (N, 2) and eq. (28)-(33) into
-    ``ref`` (N,); returns whether the first row's distances have the right signs."""
-    n = com.shape[0]
-    if mode == _CURRENT:
-        lateral[:] = _current_lateral(com_now, left_now, right_now, k[0], n)
-    elif mode == _PREDICTED:
-        lateral[:] = _predicted_lateral(com, left, right, k[0])
-    else:
-        lateral[:, 0] = width
-        lateral[:, 1] = -width
+    """:func:`_lateral` (``k``: (floor, k_pel)) into ``lateral`` (N, 2) and eq. (28)-(33)
+    into ``ref`` (N,); returns whether the first row's distances have the right signs."""
+    _lateral(mode, com, left, right, com_now, left_now, right_now, width, k[0], lateral)
     if lateral[0, 0] <= 0.0 or lateral[0, 1] >= 0.0:
         return False
     ref[:] = _reference_angles(com, left, right, k[1], lateral)
@@ -208,15 +216,12 @@ def reference_with_lateral(
     arrays of rows (N, 2) and points (2,); ``floor_and_gain``: (lateral floor, k_pel)."""
     n = p_pelvis.shape[0]
     lateral, ref = np.empty((n, 2)), np.empty(n)
-    code = _MODE_CODES.get(mode)
-    if code is None:
-        raise ValueError(f"lateral distance mode must be one of {LATERAL_MODES}, got {mode!r}")
     ok = _reference_step(
-        code, p_pelvis, p_left, p_right, p_pelvis_now, p_left_now, p_right_now,
+        _mode_code(mode), p_pelvis, p_left, p_right, p_pelvis_now, p_left_now, p_right_now,
         float(half_width), floor_and_gain, lateral, ref,
     )  # fmt: skip
     if not ok:
-        raise ValueError("the left foot's lateral distance must be > 0 and the right's < 0")
+        raise ValueError(_SIGNS)
     return ref, lateral
 
 

@@ -65,6 +65,20 @@ def _draw(view, clock=[0.0]) -> None:  # noqa: B006 (a clock that moves on betwe
     view.draw(clock[0])
 
 
+def _run_until(sim, view, shows) -> None:
+    """Let the robots walk, drawing each frame, until ``shows`` (the lesson's live box's
+    text) is true (at most 120 s), then pause them."""
+    live = view.panel.learn.live
+    try:
+        deadline = time.monotonic() + 120
+        while not shows(live.content):
+            assert time.monotonic() < deadline, live.content
+            sim.wait_frame(timeout=30)
+            _draw(view)
+    finally:
+        sim.wait_applied(sim.pause(), 60)
+
+
 def _press(panel, text: str = "", label: str = "", name: str = "mpc") -> None:
     from pelvic_walk.core.methods import METHOD_INFO
 
@@ -285,16 +299,7 @@ def test_lesson_4_shows_two_mpcs_and_the_settings_that_differ(panel_view):
     assert intent.params_of("k_pel 0.45").pelvis.k_pel == 0.45
     assert intent.params_of("mpc").pelvis.k_pel == 0.25
     assert not intent.paused
-    try:
-        deadline = time.monotonic() + 120
-        while "lesson-live" not in panel.learn.live.content or "k_pel=" not in (
-            panel.learn.live.content
-        ):
-            assert time.monotonic() < deadline, panel.learn.live.content
-            sim.wait_frame(timeout=30)
-            _draw(view)
-    finally:
-        sim.wait_applied(sim.pause(), 60)
+    _run_until(sim, view, lambda live: "lesson-live" in live and "k_pel=" in live)
     table = panel.learn.live.content
     assert "pelvic MPC" in table and "k_pel 0.45" in table
     assert "k_pel=0.25" in table and "k_pel=0.45" in table
@@ -342,14 +347,7 @@ def test_lesson_9_compares_beta_pel(panel_view):
     assert [r.strategy for r in intent.robots] == ["mpc", "mpc"]
     assert intent.params_of("beta_pel 0.01").pelvis.beta == 0.01
     assert intent.params_of("mpc").pelvis.beta == 1e-6
-    try:
-        deadline = time.monotonic() + 120
-        while "beta_pel=0.01" not in panel.learn.live.content:
-            assert time.monotonic() < deadline, panel.learn.live.content
-            sim.wait_frame(timeout=30)
-            _draw(view)
-    finally:
-        sim.wait_applied(sim.pause(), 60)
+    _run_until(sim, view, lambda live: "beta_pel=0.01" in live)
     table = panel.learn.live.content
     assert "beta_pel=1e-6" in table and "beta_pel 0.01" in table
     assert "β" not in table, "one notation: the sliders' (beta_pel)"

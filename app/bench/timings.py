@@ -64,7 +64,6 @@ import numpy as np
 from controller import strategy
 from controller.params import ControllerParams
 from controller.qp import INF, QP, QpSolver, frozen
-from controller.strategy import PelvisMpcStrategy
 from pelvic_walk.core.run import RunConfig, Session
 from pelvic_walk.core.world import JOINTS, World
 
@@ -319,14 +318,8 @@ def record_qps(ticks: int) -> dict[str, list[QP]]:
     recording = [False]
     for _ in range(_warmup_ticks(session)):
         session.tick()
-    mpc = w.strategy.strategy  # the paper's method (bench_params): it built its MPC at tick 1
-    assert isinstance(mpc, PelvisMpcStrategy) and mpc.mpc is not None
-    solvers = {
-        "com_mpc": w.com_mpc.solver,
-        "pelvis_mpc": mpc.mpc.solver,
-        "ik": w.ik_solver,
-        "arm_swing": w.arm_solver,
-    }
+    solvers = _layer_solvers(w)  # the paper's method, arms on (bench_params): all four
+    assert set(solvers) == set(QP_LAYERS)
     for name, solver in solvers.items():
         solver.compiled_steps = False  # each layer builds its QP and calls solve (the same QPs)
         _wrap(solver, record[name], recording)
