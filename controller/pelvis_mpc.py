@@ -214,21 +214,26 @@ class PelvisMpc:
     def solve(self, theta: float, theta_dot: float, theta_ref: np.ndarray) -> PelvisPlan:
         """Solve eq. (37) and integrate the first input over one control period (eq. 38)."""
         n = self.n_samples
-        theta_ref = np.asarray(theta_ref, dtype=float).reshape(-1)
-        x0 = np.array([theta, theta_dot], dtype=float)
+        if not (isinstance(theta_ref, np.ndarray) and theta_ref.ndim == 1):
+            theta_ref = np.asarray(theta_ref, dtype=float).reshape(-1)
+        theta, theta_dot = float(theta), float(theta_dot)
         args = self.solver.step_args(self._P, self._Acon)
-        if args is not None and len(theta_ref) == n:  # eq. (37) and (38) in one compiled step
+        if args is not None and theta_ref.shape[0] == n and theta_ref.dtype == np.float64:
+            # eq. (37) and (38) in one compiled step
             qp, out = self._qp, np.empty((4, n))
             status, flag, next_angle, next_rate = _step(
-                x0[0], x0[1], theta_ref, self._maps, self._k, qp.q, qp.l, qp.u, out, *args
+                theta, theta_dot, theta_ref, self._maps, self._k, qp.q, qp.l, qp.u, out, *args
             )
             res = self.solver.settle(qp, out[0], status, flag, args[1])
             if res.ok:
                 angles, rates, u, ref = out
                 return PelvisPlan(angles, rates, u, ref, next_angle, next_rate, True)
             ref = out[3]  # the copy the plan keeps
+            x0 = np.array([theta, theta_dot])
             free = self._build(ref, x0)[0]  # for the brake (as below)
         else:
+            theta_ref = np.asarray(theta_ref, dtype=float)
+            x0 = np.array([theta, theta_dot])
             ref = theta_ref.copy()  # a copy: the plan keeps it
             free, qp = self._build(ref, x0)
             res = self.solver.solve(qp)

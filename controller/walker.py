@@ -6,7 +6,7 @@ control tick"); each hands its results by name to the blocks after it:
     parameters change) sampled for the tick: ZMP reference and bounds over the horizon, foot
     trajectories (eq. 20-21),
  3. ``_predicted_com``: CoM MPC (eq. 10-18), predicted CoM (eq. 25-26),
- 4. ``_measured_com`` and ``_pelvis_position``: pelvis position (eq. 19),
+ 4. ``_pelvis_position``: the CoM from the measured joints and the pelvis position (eq. 19),
  6. ``_reference_angles``: reference pelvic angle over the horizon (eq. 27-33),
  7. ``_pelvis_strategy``: the pelvis strategy's waist rate (``controller.strategy``: the
     pelvic-rotation MPC of eq. 34-38 for the paper's method, 0 for the fixed pelvis, free for
@@ -265,16 +265,23 @@ class Walker:
         lc = clock if self.layer_times else float  # the layers' readings: only when asked
         c0 = lc()
         plan, times = self._plan_rows(t, self.params.com.zmp_margin)  # 1-2, 5
+        # the rows every block reads, as one view each: the soles over the horizon and now,
+        # the ZMP reference now (the plan's table is read-only)
+        h = _HORIZON
+        soles = (plan.p_left[h], plan.p_right[h], plan.p_left[0], plan.p_right[0])
+        zmp_now = plan.zmp_ref[0]
         c1 = lc()
         com_plan, p_world_com_des = self._predicted_com(t, plan, times)  # 3
         c2 = lc()
-        p_world_com_meas = self._measured_com(q_meas, plan)  # 4
+        p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)  # 4: X_c^m's kinematics
         c3 = lc()
-        v_world_pelvis = self._pelvis_position(p_world_com_des, p_world_com_meas)  # 4
-        theta_ref, lateral = self._reference_angles(plan, com_plan, p_world_com_des)  # 6
+        p_world_com_meas, v_world_pelvis = self._pelvis_position(  # 4
+            p_world_com_des, p_pelvis_com, p_pelvis_soles, soles, zmp_now
+        )
+        theta_ref, lateral = self._reference_angles(soles, com_plan, p_world_com_des)  # 6
         s0 = clock()
         waist_rate, pelvis_plan = self._pelvis_strategy(  # 7
-            t, plan, com_plan, p_world_com_des, theta_ref
+            t, plan, soles, com_plan, p_world_com_des, theta_ref
         )
         c4 = clock()
         ks = self.kin.compute(self.q_cmd)  # the kinematics the IK and the arms run on
@@ -288,12 +295,12 @@ class Walker:
             self.q_cmd, q_dot_low, q_dot_up, self.arms, self.dt,
             self.params.ik.joint_speed_limit, ks.cmm_yaw_low, ks.cmm_yaw_up, q_dot, q_new,
         )  # fmt: skip
-        self.q_cmd = q_new
+        self.q_cmd = q_new  # replaced every tick, never written: q_target below is this array
         failures = self._count_failures(com_plan, pelvis_plan, ik_ok, arm_ok)
         self.t = t + self.dt
         return TickOutput(
             t=t,
-            q_target=self.q_cmd.copy(),
+            q_target=q_new,
             q_dot=q_dot,
             com_plan=com_plan,
             theta_ref=theta_ref,
@@ -303,8 +310,8 @@ class Walker:
             p_world_pelvis_des=self.p_world_pelvis_des.copy(),
             p_world_com_des=p_world_com_des,
             p_world_com_meas=p_world_com_meas,
-            zmp_ref=plan.zmp_ref[0].copy(),
-            waist_angle=float(self.q_cmd[0]),
+            zmp_ref=zmp_now,
+            waist_angle=float(q_new[0]),
             waist_rate=self._last_waist_rate,
             h_low=h_low,
             h_up=h_up,
@@ -344,12 +351,22 @@ class Walker:
         self.com_state = com_plan.next_state
         return com_plan, self.com_state[0].copy()
 
-    def _measured_com(self, q_meas: np.ndarray, plan: PlanSample) -> np.ndarray:
-        """4. X_c^m: the CoM from the measured joints, the base placed so the soles are where
-        planned now.
+    def _pelvis_position(
+        self,
+        p_world_com_des: np.ndarray,
+        p_pelvis_com: np.ndarray,
+        p_pelvis_soles: np.ndarray,
+        soles: tuple[np.ndarray, ...],
+        zmp_now: np.ndarray,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """4. X_c^m, the CoM from the measured joints (``p_pelvis_com``, ``p_pelvis_soles``:
+        their kinematics with the base at the identity) with the base placed so the soles are
+        where planned now; then X_pel by eq. (19) with its feed-forward (module docstring), in
+        place on ``p_world_pelvis_des``. Returns X_c^m (3,) and the pelvis velocity (3,) over
+        the tick.
 
-        Each sole anchors one estimate (the base placed by a sole is ``sole - p_pelvis_sole``:
-        what :meth:`RobotKinematics.support_anchored_base` +
+        Each sole anchors one estimate of X_c^m (the base placed by a sole is
+        ``sole - p_pelvis_sole``: what :meth:`RobotKinematics.support_anchored_base` +
         :meth:`RobotKinematics.com_world` compute in two passes); they are blended by
         :func:`support_share`, which follows the ZMP reference: the support sole alone in
         single support, a continuous hand-over in the double support. The two estimates differ
@@ -358,53 +375,37 @@ class Walker:
         the pelvis sideways by that much within a few ticks, which threw the centre of pressure
         to the support foot's outer edge.
         """
-        p_pelvis_com, p_pelvis_soles = self.kin.com_and_soles(q_meas)
-        return _anchored_com(
-            p_pelvis_com, p_pelvis_soles, plan.p_left[0], plan.p_right[0], plan.zmp_ref[0]
-        )
-
-    def _pelvis_position(
-        self, p_world_com_des: np.ndarray, p_world_com_meas: np.ndarray
-    ) -> np.ndarray:
-        """4. X_pel by eq. (19) with its feed-forward (module docstring), in place on
-        ``p_world_pelvis_des``; returns the pelvis velocity (3,) over the tick."""
-        return _pelvis_step(
-            self.p_world_pelvis_des,
-            p_world_com_des,
-            self._last_com_des(p_world_com_des),
-            p_world_com_meas,
-            self.params.com.pelvis_gain,
-            self.pelvis_height,
-            self.dt,
-        )
-
-    def _last_com_des(self, now: np.ndarray) -> np.ndarray:
-        """The desired CoM of the previous tick (for the feed-forward of eq. 19)."""
-        prev = self._com_des_prev
-        self._com_des_prev = now.copy()
-        return now if prev is None else prev
+        prev = self._com_des_prev  # X_c^d of the last tick (the feed-forward), never written
+        self._com_des_prev = p_world_com_des
+        com_meas, v_pelvis = np.empty(3), np.empty(3)
+        _pelvis_step(
+            self.p_world_pelvis_des, p_world_com_des, p_world_com_des if prev is None else prev,
+            p_pelvis_com, p_pelvis_soles, soles[2], soles[3], zmp_now,
+            self.params.com.pelvis_gain, self.pelvis_height, self.dt, com_meas, v_pelvis,
+        )  # fmt: skip
+        return com_meas, v_pelvis
 
     def _reference_angles(
-        self, plan: PlanSample, com_plan: ComPlan, p_world_com_des: np.ndarray
+        self, soles: tuple[np.ndarray, ...], com_plan: ComPlan, p_world_com_des: np.ndarray
     ) -> tuple[np.ndarray, np.ndarray]:
         """6. Theta_pel^ref over the horizon (eq. 27-33) from the predicted CoM and the planned
-        soles, and the lateral distances Delta d_FP,y of eq. (31)-(32) it used."""
+        soles (``soles``: left and right over the horizon, then now; x, y read), and the
+        lateral distances Delta d_FP,y of eq. (31)-(32) it used."""
         p = self.params.pelvis
-        h = _HORIZON
-        com_h, feet_l, feet_r = com_plan.com, plan.p_left[h, :2], plan.p_right[h, :2]
+        com_h, feet_l, feet_r, left_now, right_now = com_plan.com, *soles
         if p.reference == "now":  # ablation: no prediction, the state now held
             n_h = len(com_h)
             com_h = np.tile(p_world_com_des[:2], (n_h, 1))
-            feet_l = np.tile(plan.p_left[0, :2], (n_h, 1))
-            feet_r = np.tile(plan.p_right[0, :2], (n_h, 1))
+            feet_l = np.tile(left_now[:2], (n_h, 1))
+            feet_r = np.tile(right_now[:2], (n_h, 1))
         return reference_with_lateral(  # lateral_distances, then reference_pelvic_angles
             p.lateral_distance,
             com_h,
             feet_l,
             feet_r,
             p_world_com_des,  # the CoM MPC's state now (the estimate would feed noise in)
-            plan.p_left[0, :2],
-            plan.p_right[0, :2],
+            left_now,
+            right_now,
             self.params.walk.step_width / 2,
             self._floor_and_gain,
         )
@@ -413,6 +414,7 @@ class Walker:
         self,
         t: float,
         plan: PlanSample,
+        soles: tuple[np.ndarray, ...],
         com_plan: ComPlan,
         p_world_com_des: np.ndarray,
         theta_ref: np.ndarray,
@@ -424,7 +426,6 @@ class Walker:
         theta_ref.flags.writeable = False
         com_plan.com.flags.writeable = False
         p_world_com_des.flags.writeable = False
-        h = _HORIZON
         rate = self.strategy.waist_rate(
             StrategyInputs(
                 t=t,
@@ -435,10 +436,10 @@ class Walker:
                 horizon_t=self.com_mpc.sample_offsets,
                 com=com_plan.com,
                 com_now=p_world_com_des,
-                left_sole=plan.p_left[h],
-                right_sole=plan.p_right[h],
-                left_sole_now=plan.p_left[0],
-                right_sole_now=plan.p_right[0],
+                left_sole=soles[0],
+                right_sole=soles[1],
+                left_sole_now=soles[2],
+                right_sole_now=soles[3],
                 support=_SIDE[plan.support_side[0]] if plan.in_ssp[0] else "both",
                 swing=_SIDE.get(plan.swing_side[0]),
                 step=int(plan.step[0]),
@@ -569,14 +570,18 @@ def _anchored_com(p_pelvis_com, p_pelvis_soles, foot_l, foot_r, zmp_ref):
 
 
 @kernel
-def _pelvis_step(pelvis, com_des, com_des_prev, com_meas, gain, height, dt):
-    """Eq. (19) with its feed-forward, in place on ``pelvis`` (3,):
-    X_pel += (X_c^d - X_c^d,prev) + K_p (X_c^d - X_c^m) in x, y; z at ``height``.
-    Returns the pelvis velocity (3,) over the tick."""
+def _pelvis_step(
+    pelvis, com_des, com_des_prev, p_pelvis_com, p_pelvis_soles, foot_l, foot_r, zmp_ref, gain,
+    height, dt, com_meas, v_pelvis,
+):  # fmt: skip
+    """X_c^m (:func:`_anchored_com`) into ``com_meas`` (3,), then eq. (19) with its
+    feed-forward in place on ``pelvis`` (3,): X_pel += (X_c^d - X_c^d,prev) + K_p (X_c^d -
+    X_c^m) in x, y, z at ``height``; the pelvis velocity over the tick into ``v_pelvis``."""
+    com_meas[:] = _anchored_com(p_pelvis_com, p_pelvis_soles, foot_l, foot_r, zmp_ref)
     prev = pelvis.copy()
     pelvis[:2] += (com_des - com_des_prev) + gain * (com_des - com_meas[:2])
     pelvis[2] = height
-    return (pelvis - prev) / dt
+    v_pelvis[:] = (pelvis - prev) / dt
 
 
 @kernel
