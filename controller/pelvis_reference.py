@@ -213,7 +213,8 @@ def reference_with_lateral(
 ) -> tuple[np.ndarray, np.ndarray]:
     """(theta_ref (N,), lateral (N, 2)): :func:`lateral_distances` then
     :func:`reference_pelvic_angles` in one compiled call (the walker's tick), for float
-    arrays of rows (N, 2) and points (2,); ``floor_and_gain``: (lateral floor, k_pel)."""
+    arrays of rows (N, 2) and points (2,), or of 3-D points (their x, y read: the plan's sole
+    rows as they are); ``floor_and_gain``: (lateral floor, k_pel)."""
     n = p_pelvis.shape[0]
     lateral, ref = np.empty((n, 2)), np.empty(n)
     ok = _reference_step(
