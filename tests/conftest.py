@@ -103,7 +103,8 @@ def pytest_xdist_make_scheduler(config, log):
 
         def _assign_work_unit(self, node) -> None:
             # xdist hands out the first group of its (ordered) queue: put the costliest there
-            self.workqueue.move_to_end(next_group(self.workqueue), last=False)
+            if self.workqueue:
+                self.workqueue.move_to_end(next_group(self.workqueue), last=False)
             super()._assign_work_unit(node)
 
     return ByTestGroup(config, log)
