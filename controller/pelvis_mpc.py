@@ -214,12 +214,13 @@ class PelvisMpc:
     def solve(self, theta: float, theta_dot: float, theta_ref: np.ndarray) -> PelvisPlan:
         """Solve eq. (37) and integrate the first input over one control period (eq. 38)."""
         n = self.n_samples
-        if not (isinstance(theta_ref, np.ndarray) and theta_ref.ndim == 1):
+        if not (
+            isinstance(theta_ref, np.ndarray) and theta_ref.ndim == 1 and theta_ref.dtype == float
+        ):  # (the walker's is: no conversion then)
             theta_ref = np.asarray(theta_ref, dtype=float).reshape(-1)
         theta, theta_dot = float(theta), float(theta_dot)
         args = self.solver.step_args(self._P, self._Acon)
-        if args is not None and theta_ref.shape[0] == n and theta_ref.dtype == np.float64:
-            # eq. (37) and (38) in one compiled step
+        if args is not None and len(theta_ref) == n:  # eq. (37) and (38) in one compiled step
             qp, out = self._qp, np.empty((4, n))
             status, flag, next_angle, next_rate = _step(
                 theta, theta_dot, theta_ref, self._maps, self._k, qp.q, qp.l, qp.u, out, *args
@@ -232,7 +233,6 @@ class PelvisMpc:
             x0 = np.array([theta, theta_dot])
             free = self._build(ref, x0)[0]  # for the brake (as below)
         else:
-            theta_ref = np.asarray(theta_ref, dtype=float)
             x0 = np.array([theta, theta_dot])
             ref = theta_ref.copy()  # a copy: the plan keeps it
             free, qp = self._build(ref, x0)

@@ -576,7 +576,7 @@ def _pelvis_step(
 ):  # fmt: skip
     """X_c^m (:func:`_anchored_com`) into ``com_meas`` (3,), then eq. (19) with its
     feed-forward in place on ``pelvis`` (3,): X_pel += (X_c^d - X_c^d,prev) + K_p (X_c^d -
-    X_c^m) in x, y, z at ``height``; the pelvis velocity over the tick into ``v_pelvis``."""
+    X_c^m) in x, y, and z at ``height``; the pelvis velocity over the tick into ``v_pelvis``."""
     com_meas[:] = _anchored_com(p_pelvis_com, p_pelvis_soles, foot_l, foot_r, zmp_ref)
     prev = pelvis.copy()
     pelvis[:2] += (com_des - com_des_prev) + gain * (com_des - com_meas[:2])
